@@ -1,0 +1,84 @@
+"""``abcwc bench``: how fast the parts run on this machine (medians of repeats).
+
+Benchmarks measure; they assert nothing. Each benchmark returns named figures; the
+command prints one table (or JSON) of their medians over ``repeats`` runs.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import time
+from collections.abc import Callable
+
+from abcwc.types import Twist
+
+Benchmark = Callable[[], dict[str, float]]
+BENCHMARKS: dict[str, tuple[str, Benchmark]] = {}
+
+
+def benchmark(name: str, description: str) -> Callable[[Benchmark], Benchmark]:
+    """Register a benchmark under ``name``."""
+
+    def register(fn: Benchmark) -> Benchmark:
+        BENCHMARKS[name] = (description, fn)
+        return fn
+
+    return register
+
+
+def _real_time_factor(seconds: float = 60.0, **options: object) -> float:
+    from abcwc.sim.base import SimBase
+
+    chair = SimBase(errors="worn", **options)  # type: ignore[arg-type]
+    # a gentle circle in the open middle of the lab: no collisions, all sensors live
+    command = Twist(0.4, 0.35)
+    start = time.perf_counter()
+    chair.drive(command, seconds)
+    return seconds / (time.perf_counter() - start)
+
+
+@benchmark("sim", "simulator real-time factor (lab world, 60 simulated s)")
+def bench_sim() -> dict[str, float]:
+    return {
+        "real-time factor, encoders+gyro+sonar+IR": _real_time_factor(
+            world="lab", start="centre"),
+        "real-time factor, + lidar 360 + depth scan": _real_time_factor(
+            world="lab", start="centre", lidar=True, depth_scan=True),
+        "real-time factor, floor world + lidar + depth": _real_time_factor(
+            world="floor", start="corridor_east", lidar=True, depth_scan=True, people=False),
+    }
+
+
+def run_benchmarks(names: list[str] | None = None, repeats: int = 3) -> dict[str, dict]:
+    """Run the named benchmarks (all if None); medians of ``repeats`` runs."""
+    names = names or list(BENCHMARKS)
+    unknown = [n for n in names if n not in BENCHMARKS]
+    if unknown:
+        raise ValueError(f"unknown benchmark(s) {', '.join(unknown)}; "
+                         f"available: {', '.join(BENCHMARKS)}")
+    if repeats < 1:
+        raise ValueError(f"repeats {repeats} outside 1..")
+    results: dict[str, dict] = {}
+    for name in names:
+        _, fn = BENCHMARKS[name]
+        runs = [fn() for _ in range(repeats)]
+        results[name] = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
+    return results
+
+
+def format_table(results: dict[str, dict]) -> str:
+    """The results as an aligned text table."""
+    rows = [(name, key, f"{value:,.1f}") for name, figures in results.items()
+            for key, value in figures.items()]
+    widths = [max(len(r[i]) for r in rows + [("benchmark", "figure", "median")])
+              for i in range(3)]
+    line = lambda r: f"{r[0]:<{widths[0]}}  {r[1]:<{widths[1]}}  {r[2]:>{widths[2]}}"  # noqa: E731
+    out = [line(("benchmark", "figure", "median")), "-" * (sum(widths) + 4)]
+    out += [line(r) for r in rows]
+    return "\n".join(out)
+
+
+def to_json(results: dict[str, dict]) -> str:
+    """The results as JSON."""
+    return json.dumps(results, indent=2, sort_keys=True)

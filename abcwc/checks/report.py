@@ -1,0 +1,285 @@
+"""How an exercise check reports: one plain line, pass or not yet.
+
+Every exercise in the course ends with a check. A check runs the student's function on
+known inputs, compares the answers with the expected ones, and prints exactly one line::
+
+    ✔ pass — pot mapping: all 7 thesis values match
+    … not yet — pot mapping: joystick 398 gave 250, expected 253 (eqn 1)
+
+A check never raises: an unwritten exercise (the stub still raises
+``NotImplementedError``) and an exception from the student's code are both reported as
+"not yet", so an untouched student notebook runs to the end. Later cells then call
+:func:`use_or_fallback` to carry on with the library's own implementation.
+
+The printed text is plain and deterministic, because the course's CI (nbval) compares
+the outputs stored in ``solutions/`` with a fresh run.
+
+Writing a chapter check (``abcwc/checks/chNN.py``)::
+
+    from abcwc.checks import checker, expect_equal
+
+    @checker("pot mapping")
+    def pot_mapping(pot_from_joystick) -> str:
+        for joystick, expected in TABLE:
+            expect_equal(pot_from_joystick(joystick), expected,
+                         what=f"joystick {joystick}", ref="eqn 1")
+        return f"all {len(TABLE)} thesis values match"
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, ParamSpec, TypeVar
+
+import numpy as np
+
+__all__ = [
+    "NOT_YET",
+    "PASS",
+    "CheckResult",
+    "NotYet",
+    "check",
+    "checker",
+    "expect",
+    "expect_close",
+    "expect_equal",
+    "format_value",
+    "use_or_fallback",
+]
+
+PASS = "✔ pass"
+NOT_YET = "… not yet"
+NOT_WRITTEN = "not written yet (the cell above still raises NotImplementedError)"
+_MAX_MESSAGE = 300
+
+P = ParamSpec("P")
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+class NotYet(Exception):
+    """Raised inside a check when the student's answer is wrong.
+
+    The message says what was wrong, e.g. ``joystick 398 gave 250, expected 253 (eqn 1)``;
+    :func:`check` turns it into a "not yet" line.
+    """
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """The outcome of one exercise check.
+
+    ``bool(result)`` is ``result.passed``; ``str(result)`` is the line the check printed.
+    """
+
+    name: str
+    passed: bool
+    message: str
+
+    @property
+    def line(self) -> str:
+        """The one line a check prints, e.g. ``✔ pass — odometry: 4 poses match``."""
+        status = PASS if self.passed else NOT_YET
+        return f"{status} — {self.name}: {self.message}"
+
+    def __bool__(self) -> bool:
+        return self.passed
+
+    def __str__(self) -> str:
+        return self.line
+
+    def __repr__(self) -> str:
+        return f"CheckResult({self.line!r})"
+
+
+def _one_line(text: str) -> str:
+    """Squash a message onto one line and cap its length."""
+    text = " ".join(text.split())
+    if len(text) > _MAX_MESSAGE:
+        text = text[: _MAX_MESSAGE - 1] + "…"
+    return text
+
+
+def check(
+    name: str, fn: Callable[P, str | None], /, *args: P.args, **kwargs: P.kwargs
+) -> CheckResult:
+    """Run the comparison ``fn(*args, **kwargs)``, print one line and return the result.
+
+    ``fn`` passes by returning (a short message such as ``"all 7 values match"``, or
+    ``None`` for ``"ok"``) and fails by raising :class:`NotYet` with what was wrong.
+    ``NotImplementedError`` means the exercise is not written yet; any other exception
+    is reported as raised by the student's code, without a traceback.
+    ``KeyboardInterrupt`` and ``SystemExit`` are not caught.
+
+    Example::
+
+        def compare(fn):
+            expect_close(fn(1000), 0.9425, what="1000 ticks", atol=1e-4)
+            return "1 value matches"
+
+        result = check("wheel distance", compare, wheel_distance)
+    """
+    try:
+        message = fn(*args, **kwargs)
+    except NotYet as exc:
+        result = CheckResult(name, False, _one_line(str(exc)) or "wrong answer")
+    except NotImplementedError:
+        result = CheckResult(name, False, NOT_WRITTEN)
+    except Exception as exc:  # noqa: BLE001 - student code may raise anything
+        detail = _one_line(str(exc))
+        raised = type(exc).__name__ + (f": {detail}" if detail else "")
+        result = CheckResult(name, False, f"your code raised {raised}")
+    else:
+        result = CheckResult(name, True, _one_line(message) if message else "ok")
+    print(result.line)
+    return result
+
+
+def checker(name: str) -> Callable[[Callable[P, str | None]], Callable[P, CheckResult]]:
+    """Decorator form of :func:`check`: the decorated function returns a CheckResult.
+
+    Example::
+
+        @checker("wheel distance")
+        def wheel_distance(fn) -> str:
+            expect_close(fn(1000), 0.9425, what="1000 ticks", atol=1e-4)
+            return "1 value matches"
+
+        result = wheel_distance(student_wheel_distance)   # prints one line
+    """
+
+    def decorate(fn: Callable[P, str | None]) -> Callable[P, CheckResult]:
+        @functools.wraps(fn)
+        def run(*args: P.args, **kwargs: P.kwargs) -> CheckResult:
+            return check(name, fn, *args, **kwargs)
+
+        return run
+
+    return decorate
+
+
+def use_or_fallback(student_fn: F, library_fn: F, result: CheckResult | bool) -> F:
+    """Return ``student_fn`` if its check passed, else ``library_fn``; say which in one line.
+
+    Example::
+
+        distance = use_or_fallback(wheel_distance, abcwc.estimation.wheel_distance, result)
+    """
+    if bool(result):
+        print(f"→ the rest of this notebook uses your {_name(student_fn)}")
+        return student_fn
+    print(f"→ the rest of this notebook uses abcwc's own {_name(library_fn)} instead")
+    return library_fn
+
+
+def _name(fn: Callable[..., Any]) -> str:
+    """``qualname`` of a function, with its module when that is part of abcwc."""
+    qualname = getattr(fn, "__qualname__", None) or getattr(fn, "__name__", repr(fn))
+    module = getattr(fn, "__module__", None) or ""
+    if module == "abcwc" or module.startswith("abcwc."):
+        return f"{qualname} (from {module})"
+    return qualname
+
+
+# --- comparisons ----------------------------------------------------------------------
+
+
+def format_value(value: Any) -> str:
+    """Format a value for a check message: ints as ints, floats to 6 significant digits."""
+    if isinstance(value, bool | np.bool_):
+        return str(bool(value))
+    if isinstance(value, int | np.integer):
+        return str(int(value))
+    if isinstance(value, float | np.floating):
+        return f"{float(value):.6g}"
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        return format_value(value.item())
+    text = repr(value)
+    return text if len(text) <= 60 else text[:59] + "…"
+
+
+def _suffix(ref: str | None) -> str:
+    return f" ({ref})" if ref else ""
+
+
+def _shape(array: np.ndarray) -> str:
+    return "a single number" if array.ndim == 0 else f"an array of shape {array.shape}"
+
+
+def expect(condition: bool, message: str) -> None:
+    """Raise :class:`NotYet` with ``message`` unless ``condition`` holds."""
+    if not condition:
+        raise NotYet(message)
+
+
+def expect_equal(got: Any, expected: Any, *, what: str, ref: str | None = None) -> None:
+    """Require ``got == expected`` exactly (numbers, strings, tuples, ...).
+
+    Message on failure: ``<what> gave <got>, expected <expected> (<ref>)``.
+    """
+    try:
+        if isinstance(got, np.ndarray) or isinstance(expected, np.ndarray):
+            same = bool(np.array_equal(got, expected))
+        else:
+            same = bool(got == expected)
+    except (ValueError, TypeError):  # e.g. a type that cannot be compared
+        same = False
+    if not same:
+        raise NotYet(
+            f"{what} gave {format_value(got)}, expected {format_value(expected)}{_suffix(ref)}"
+        )
+
+
+def expect_close(
+    got: Any,
+    expected: Any,
+    *,
+    what: str,
+    rtol: float = 1e-6,
+    atol: float = 0.0,
+    ref: str | None = None,
+    unit: str = "",
+) -> None:
+    """Require ``got`` to match ``expected`` within ``atol + rtol * |expected|``.
+
+    Works for numbers and for arrays (element by element, shapes must match). Messages:
+
+    - ``1000 ticks gave 0.95 m, expected 0.942478 m ± 0.001 m (circumference)``
+    - ``pose[3] gave 1.2, expected 1 ± 1e-06 (eqn 5; 2 of 50 values differ)``
+    - ``wheel speeds gave None, expected a number like 0.5``
+    """
+    unit_s = f" {unit}" if unit else ""
+    expected_arr = np.asarray(expected, dtype=float)
+    try:
+        got_arr = np.asarray(got)
+        if got_arr.dtype.kind not in "biuf":
+            raise TypeError("not a number")
+        got_arr = got_arr.astype(float)
+    except (TypeError, ValueError):
+        kind = "a number" if expected_arr.ndim == 0 else _shape(expected_arr)
+        raise NotYet(
+            f"{what} gave {format_value(got)}, expected {kind} like "
+            f"{format_value(expected)}{_suffix(ref)}"
+        ) from None
+    if got_arr.shape != expected_arr.shape:
+        raise NotYet(
+            f"{what} gave {_shape(got_arr)}, expected {_shape(expected_arr)}{_suffix(ref)}"
+        )
+    ok = np.isclose(got_arr, expected_arr, rtol=rtol, atol=atol, equal_nan=True)
+    if np.all(ok):
+        return
+    bad = np.argwhere(~ok)
+    first = tuple(int(i) for i in bad[0])
+    g, e = got_arr[first], expected_arr[first]
+    tol = atol + rtol * abs(float(e)) if math.isfinite(float(e)) else 0.0
+    where = what if not first else f"{what}[{', '.join(map(str, first))}]"
+    plus_minus = f" ± {tol:.2g}{unit_s}" if tol > 0 else ""
+    notes = [ref] if ref else []
+    if ok.size > 1:
+        notes.append(f"{len(bad)} of {ok.size} values differ")
+    raise NotYet(
+        f"{where} gave {format_value(g)}{unit_s}, expected {format_value(e)}{unit_s}"
+        f"{plus_minus}{_suffix('; '.join(notes))}"
+    )

@@ -1,0 +1,99 @@
+"""The interface board's safety logic, as the firmware runs it every loop.
+
+Between the joystick and the motor controller sits the Arduino. Whatever the host
+asks, it keeps three rules (DESIGN.md section 6):
+
+1. the joystick always wins: a deflection outside the dead band (248..260 on the pot
+   scale) drives the pots through eqn 1 within one loop;
+2. pot outputs never leave the safe range 8..253 (and the host's speed cap);
+3. no valid command for 250 ms puts both pots at neutral.
+
+:class:`InterfaceBoard` is the Python twin of ``firmware/core``; the simulator runs it
+so a simulated chair obeys the same rules as the real one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from abcwc.control.pots import joystick_to_pot_byte
+from abcwc.control.velocity import twist_to_pot_command
+from abcwc.params import ChairParams, default_params
+from abcwc.types import PotCommand, StatusFlags, Twist
+
+# Joystick ADC readings outside this band cannot come from a working joystick
+# (disconnected: near 0; shorted: near 1023).
+JOYSTICK_PLAUSIBLE_MIN = 60
+JOYSTICK_PLAUSIBLE_MAX = 450
+
+
+@dataclass(frozen=True)
+class BoardOutput:
+    """What the board writes to the pots this loop, and why."""
+
+    pots: PotCommand
+    flags: StatusFlags
+
+
+class InterfaceBoard:
+    """Joystick override, clamps, speed cap and watchdog (times in seconds)."""
+
+    def __init__(self, params: ChairParams | None = None, speed_cap: int | None = None):
+        self.params = params or default_params()
+        p = self.params
+        self.speed_cap = p.pot_full_scale_offset if speed_cap is None else speed_cap
+        self.set_speed_cap(self.speed_cap)
+        self._command: PotCommand | None = None
+        self._command_time = float("-inf")
+
+    def set_speed_cap(self, offset: int) -> None:
+        """Limit host commands to ``128 +- offset`` on each channel (0..125)."""
+        full = self.params.pot_full_scale_offset
+        if isinstance(offset, bool) or not isinstance(offset, int) or not 0 <= offset <= full:
+            raise ValueError(f"speed cap {offset!r} outside 0..{full} (pot bytes from 128)")
+        self.speed_cap = offset
+
+    def command(self, command: PotCommand | Twist, now: float) -> None:
+        """Accept a host command at time ``now`` (s); it feeds the watchdog."""
+        if isinstance(command, Twist):
+            command = twist_to_pot_command(command, self.params)
+        elif not isinstance(command, PotCommand):
+            raise TypeError(f"command must be a PotCommand or Twist, got {type(command).__name__}")
+        self._command = command
+        self._command_time = now
+
+    @property
+    def last_command(self) -> PotCommand | None:
+        """The last host command as pot bytes (before clamps and the cap)."""
+        return self._command
+
+    def stop(self, now: float) -> None:
+        """Host asks for an immediate stop (a valid command: neutral pots)."""
+        self.command(PotCommand(self.params.pot_neutral, self.params.pot_neutral), now)
+
+    def update(self, now: float, joystick_fb: int, joystick_lr: int) -> BoardOutput:
+        """One firmware loop: decide the pot bytes from the joystick and last command."""
+        p = self.params
+        neutral = PotCommand(p.pot_neutral, p.pot_neutral)
+        readings = (joystick_fb, joystick_lr)
+        if any(not JOYSTICK_PLAUSIBLE_MIN <= r <= JOYSTICK_PLAUSIBLE_MAX for r in readings):
+            return BoardOutput(neutral, StatusFlags.JOYSTICK_FAULT)
+        if any(not p.joystick_dead_band_low <= r <= p.joystick_dead_band_high for r in readings):
+            fb, lr = (
+                joystick_to_pot_byte(min(max(r, p.joystick_min), p.joystick_max), p)
+                for r in readings
+            )
+            return BoardOutput(PotCommand(fb, lr), StatusFlags.JOYSTICK_OVERRIDE)
+        if self._command is None or now - self._command_time > p.watchdog_timeout + 1e-9:
+            return BoardOutput(neutral, StatusFlags.WATCHDOG_TRIPPED)
+        flags = StatusFlags.NONE
+        bytes_out = []
+        for value in (self._command.fb, self._command.lr):
+            safe = min(max(value, p.pot_safe_min), p.pot_safe_max)
+            if safe != value:
+                flags |= StatusFlags.CLAMPED
+            capped = min(max(safe, p.pot_neutral - self.speed_cap), p.pot_neutral + self.speed_cap)
+            if capped != safe:
+                flags |= StatusFlags.SPEED_CAPPED
+            bytes_out.append(capped)
+        return BoardOutput(PotCommand(*bytes_out), flags)

@@ -1,0 +1,299 @@
+"""SimBase: the simulated chair behind the one Base interface.
+
+A top-down pymunk world (no gravity) holds the walls, the walkers and the chair: a
+rigid body shaped like the chair's footprint, with its origin at base_link (the
+drive-axle midpoint). The drive wheels are modelled the way pymunk's top-down "tank"
+example does it: a kinematic control body carries the wheels' velocity, and a pivot
+joint plus a gear joint with bias switched off pull the chair to that velocity with
+at most the tyres' friction force and torque. So the chair does not slip sideways
+unless something pushes harder than the tyres grip. The front casters are free and
+carry no force. Every control period (20 ms) the interface board's rules run
+(:class:`abcwc.control.InterfaceBoard`), the motor controller turns pot bytes into
+wheel speeds (:mod:`abcwc.sim.motor`), physics advances, and the sensors report.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pymunk
+
+from abcwc.control.interface_board import InterfaceBoard
+from abcwc.log import LogRecorder, RunLog
+from abcwc.params import ChairParams, default_params
+from abcwc.sim.motor import ChairErrors, MotorController, resolve_errors
+from abcwc.sim.people import PERSON_COLLISION_TYPE, Walker, circles_of
+from abcwc.sim.sensors import Encoders, Gyro, IrRing, ScanSensor, Sonar
+from abcwc.sim.world import World, load_world
+from abcwc.types import LaserScan, Pose2D, PotCommand, SensorFrame, StatusFlags, Twist, wrap_angle
+
+CHAIR_COLLISION_TYPE = 1
+WALL_COLLISION_TYPE = 2
+WALL_RADIUS = 0.005  # m, collision thickness of a wall line (sensors see the line)
+TYRE_FRICTION = 0.8  # rubber on indoor floor
+GRAVITY = 9.81
+PHYSICS_SUBSTEPS = 1  # 20 ms steps: the tyres never need more than their grip
+
+Controller = Callable[[SensorFrame], "PotCommand | Twist | None"]
+
+
+class SimBase:
+    """The simulated chair. Same surface as the real one (:class:`abcwc.hw.SerialBase`).
+
+    ``send`` a PotCommand or Twist, ``step`` one control period, read the SensorFrame;
+    or ``run(controller, seconds)``. The same ``seed`` gives the same run.
+    """
+
+    def __init__(
+        self,
+        world: str | World = "lab",
+        seed: int = 0,
+        errors: ChairErrors | str | None = "worn",
+        params: ChairParams | None = None,
+        lidar: bool = False,
+        depth_scan: bool = False,
+        start: Pose2D | str | None = None,
+        people: bool = True,
+    ):
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+        self.params = p = params or default_params()
+        self.world = world if isinstance(world, World) else load_world(world)
+        self.seed = int(seed)
+        self.errors = resolve_errors(errors)
+        self.period = p.control_period
+        rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(self.seed).spawn(7)]
+        self.board = InterfaceBoard(p)
+        self.motors = MotorController(p, self.errors, self.period, rngs[0])
+        self.encoders = Encoders(p, self.errors.encoder_wheel_left, self.errors.encoder_wheel_right)
+        self.gyro = Gyro(p.gyro, self.period, rngs[1])
+        self.sonar = Sonar(p.sonar, rngs[2])
+        self.ir = IrRing(p.ir, rngs[3])
+        self.lidar = ScanSensor(p.lidar, rngs[4]) if lidar else None
+        self.depth_camera = ScanSensor(p.depth_scan, rngs[5], depth_noise=True) if depth_scan else None
+        self._build_space(self._start_pose(start), people)
+        self.t = 0.0
+        self.steps = 0
+        self.joystick = (p.joystick_centre, p.joystick_centre)
+        self.collisions = 0
+        self.collision_impulse = 0.0
+        self.max_collision_impulse = 0.0
+        self._pots = PotCommand(p.pot_neutral, p.pot_neutral)
+        self._surface_speeds = (0.0, 0.0)
+        self._flags = StatusFlags.WATCHDOG_TRIPPED
+        self._last_scan: dict[str, LaserScan | None] = {"lidar": None, "depth_scan": None}
+        self._sonar_reading = p.sonar.max_range
+        self._ir_reading = np.full(6, np.inf)
+        self._read_slow_sensors(force=True)
+        self._frame = self._make_frame(gyro_z=self.gyro.read(0.0))
+
+    # ----------------------------------------------------------------- set-up
+    def _start_pose(self, start: Pose2D | str | None) -> Pose2D:
+        if start is None:
+            return self.world.start
+        if isinstance(start, str):
+            if start not in self.world.places:
+                raise ValueError(f"unknown place {start!r} in world {self.world.name!r}; "
+                                 f"places: {', '.join(self.world.places)}")
+            return self.world.places[start]
+        if isinstance(start, Pose2D):
+            return start
+        raise ValueError(f"start must be a Pose2D or a place name, got {start!r}")
+
+    def _build_space(self, start: Pose2D, people: bool) -> None:
+        p = self.params
+        space = pymunk.Space()
+        space.gravity = (0.0, 0.0)
+        space.collision_slop = 0.001  # metres: pymunk's default (0.1) suits pixels
+        for x1, y1, x2, y2 in self.world.walls:
+            wall = pymunk.Segment(space.static_body, (x1, y1), (x2, y2), WALL_RADIUS)
+            wall.collision_type = WALL_COLLISION_TYPE
+            wall.friction = 0.5
+            space.add(wall)
+        mass = p.total_mass
+        outline = p.footprint
+        moment = pymunk.moment_for_poly(mass, outline)
+        chair = pymunk.Body(mass, moment)
+        shape = pymunk.Poly(chair, outline)
+        shape.collision_type = CHAIR_COLLISION_TYPE
+        shape.friction = 0.5
+        chair.position = (start.x, start.y)
+        chair.angle = start.theta
+        control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        control.position = chair.position
+        traction = pymunk.PivotJoint(control, chair, (0, 0), (0, 0))
+        traction.max_bias = 0.0
+        traction.max_force = TYRE_FRICTION * mass * GRAVITY
+        steering = pymunk.GearJoint(control, chair, 0.0, 1.0)
+        steering.max_bias = 0.0
+        steering.max_force = TYRE_FRICTION * mass * GRAVITY * p.wheel_base / 2
+        space.add(chair, shape, control, traction, steering)
+        self.walkers = [Walker(spec, space) for spec in self.world.people] if people else []
+        space.on_collision(CHAIR_COLLISION_TYPE, WALL_COLLISION_TYPE,
+                           begin=self._on_contact, post_solve=self._on_impulse)
+        space.on_collision(CHAIR_COLLISION_TYPE, PERSON_COLLISION_TYPE,
+                           begin=self._on_contact, post_solve=self._on_impulse)
+        self.space, self.chair, self._control = space, chair, control
+
+    def _on_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self.collisions += 1
+
+    def _on_impulse(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        impulse = abs(arbiter.total_impulse)
+        self.collision_impulse += impulse
+        self.max_collision_impulse = max(self.max_collision_impulse, impulse)
+
+    # ----------------------------------------------------------------- state
+    @property
+    def pose(self) -> Pose2D:
+        """Ground-truth pose of base_link in the world frame."""
+        x, y = self.chair.position
+        return Pose2D(x, y, wrap_angle(self.chair.angle))
+
+    @property
+    def frame(self) -> SensorFrame:
+        """The latest SensorFrame."""
+        return self._frame
+
+    def read(self) -> SensorFrame:
+        """The latest SensorFrame (same as :attr:`frame`)."""
+        return self._frame
+
+    # ----------------------------------------------------------------- commands
+    def send(self, command: PotCommand | Twist) -> None:
+        """Send a command; it holds until replaced or until the 250 ms watchdog."""
+        self.board.command(command, self.t)
+
+    def stop(self) -> None:
+        """Command both pots to neutral now."""
+        self.board.stop(self.t)
+
+    def set_joystick(self, fb: int | None = None, lr: int | None = None) -> None:
+        """Set the virtual joystick's ADC readings (pot scale; 254 is centred).
+
+        A deflection outside 248..260 on either axis overrides every host command.
+        """
+        values = []
+        for name, value, old in (("fb", fb, self.joystick[0]), ("lr", lr, self.joystick[1])):
+            if value is None:
+                values.append(old)
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                raise ValueError(f"joystick {name} must be an integer ADC value 0..1023, "
+                                 f"got {value!r}")
+            if not 0 <= value <= self.params.adc_max:
+                raise ValueError(f"joystick {name} {value} outside 0..{self.params.adc_max}")
+            values.append(int(value))
+        self.joystick = (values[0], values[1])
+
+    def release_joystick(self) -> None:
+        """Let the joystick spring back to the centre."""
+        c = self.params.joystick_centre
+        self.joystick = (c, c)
+
+    def set_speed_cap(self, offset: int) -> None:
+        """Limit host commands to 128 +- ``offset`` pot bytes (as the real chair's cap)."""
+        self.board.set_speed_cap(offset)
+
+    # ----------------------------------------------------------------- stepping
+    def step(self) -> SensorFrame:
+        """Advance one control period and return the new SensorFrame."""
+        dt = self.period
+        out = self.board.update(self.t, *self.joystick)
+        self._pots, self._flags = out.pots, out.flags
+        # pymunk moves bodies with the velocities solved in the previous step, then
+        # solves new ones: this step executes the wheel motion decided last period.
+        self.encoders.advance(*self._surface_speeds, dt)
+        motion = self.motors.advance(out.pots)
+        self._surface_speeds = (motion.surface_left, motion.surface_right)
+        theta = self.chair.angle
+        self._control.velocity = (motion.v * math.cos(theta), motion.v * math.sin(theta))
+        self._control.angular_velocity = motion.w
+        sub = dt / PHYSICS_SUBSTEPS
+        for walker in self.walkers:
+            walker.steer(dt)
+        for _ in range(PHYSICS_SUBSTEPS):
+            self.space.step(sub)
+        self.steps += 1
+        self.t = self.steps * dt
+        gyro_z = self.gyro.read(self.chair.angular_velocity)
+        self._read_slow_sensors()
+        self._frame = self._make_frame(gyro_z)
+        return self._frame
+
+    def _read_slow_sensors(self, force: bool = False) -> None:
+        """10 Hz sensors, staggered over the five periods of each 100 ms."""
+        phase = self.steps % 5
+        pose = self.pose
+        walls = self.world.walls
+        circles = circles_of(self.walkers)
+        if force or phase == 0:
+            self._sonar_reading = self.sonar.read(pose, walls, circles)
+        if force or phase == 1:
+            self._ir_reading = self.ir.read(pose, walls, circles)
+        if self.lidar is not None and (force or phase == 2):
+            self._last_scan["lidar"] = self.lidar.read(pose, walls, circles, self.t)
+        if self.depth_camera is not None and (force or phase == 3):
+            self._last_scan["depth_scan"] = self.depth_camera.read(pose, walls, circles, self.t)
+
+    def _make_frame(self, gyro_z: float) -> SensorFrame:
+        left, right = self.encoders.counts
+        return SensorFrame(
+            t=self.t, ticks_left=left, ticks_right=right, gyro_z=gyro_z,
+            sonar=self._sonar_reading, ir=self._ir_reading,
+            joystick_fb=self.joystick[0], joystick_lr=self.joystick[1],
+            pot_fb=self._pots.fb, pot_lr=self._pots.lr, flags=self._flags,
+            pose=self.pose, lidar=self._last_scan["lidar"],
+            depth_scan=self._last_scan["depth_scan"], collisions=self.collisions,
+        )
+
+    # ----------------------------------------------------------------- runs
+    def run(self, controller: Controller, seconds: float, progress: bool = False) -> RunLog:
+        """Call ``controller(frame)`` every period for ``seconds``; send what it returns.
+
+        The controller returns a PotCommand, a Twist, or None (send nothing: after
+        250 ms the watchdog stops the chair). Returns the whole run as a RunLog.
+        """
+        if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds >= 0):
+            raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
+        steps = round(seconds / self.period)
+        recorder = LogRecorder(self.log_meta())
+        iterator = range(steps)
+        if progress:
+            from tqdm.auto import tqdm
+
+            iterator = tqdm(iterator, desc=f"simulating {seconds:g} s", unit="step")
+        frame = self._frame
+        for _ in iterator:
+            command = controller(frame)
+            sent = None
+            if command is not None:
+                self.send(command)
+                sent = self.board.last_command
+            frame = self.step()
+            recorder.add(frame, command, sent)
+        return recorder.build()
+
+    def drive(self, command: PotCommand | Twist, seconds: float) -> RunLog:
+        """Send the same command every period for ``seconds``."""
+        return self.run(lambda frame: command, seconds)
+
+    def log_meta(self) -> dict:
+        """What a log needs to say where it came from."""
+        e = self.errors
+        return {
+            "source": "sim", "world": self.world.name, "seed": self.seed,
+            "period": self.period, "start_time": self.t,
+            "errors": {k: getattr(e, k) for k in e.__dataclass_fields__},
+        }
+
+    def close(self) -> None:
+        """Nothing to release for the simulator; present for the Base interface."""
+
+    def __enter__(self) -> SimBase:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,70 @@
+"""People who walk fixed paths: kinematic discs the sensors see and the chair can hit.
+
+A walker heads for its next waypoint at constant speed and, at the end of its path,
+loops back to the start or turns round. It does not avoid the chair: that is the
+chair's job.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pymunk
+
+from abcwc.sim.world import PersonSpec
+
+PERSON_COLLISION_TYPE = 3
+
+
+class Walker:
+    """One person on a path, as a pymunk kinematic body with a circle shape."""
+
+    def __init__(self, spec: PersonSpec, space: pymunk.Space):
+        self.spec = spec
+        self.body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        self.body.position = tuple(spec.path[0])
+        self.shape = pymunk.Circle(self.body, spec.radius)
+        self.shape.collision_type = PERSON_COLLISION_TYPE
+        self.shape.friction = 0.5
+        space.add(self.body, self.shape)
+        self._waypoints = [tuple(map(float, p)) for p in spec.path]
+        self._target = 1
+        self._direction = 1
+
+    def steer(self, dt: float) -> None:
+        """Set the velocity for the next ``dt`` seconds towards the current waypoint."""
+        x, y = self.body.position
+        tx, ty = self._waypoints[self._target]
+        distance = math.hypot(tx - x, ty - y)
+        if distance < self.spec.speed * dt:
+            self._advance_target()
+            tx, ty = self._waypoints[self._target]
+            distance = math.hypot(tx - x, ty - y)
+        if distance < 1e-9:
+            self.body.velocity = (0.0, 0.0)
+            return
+        scale = self.spec.speed / distance
+        self.body.velocity = ((tx - x) * scale, (ty - y) * scale)
+
+    def _advance_target(self) -> None:
+        last = len(self._waypoints) - 1
+        if self.spec.loop:
+            self._target = (self._target + 1) % (last + 1)
+        else:
+            if not 0 <= self._target + self._direction <= last:
+                self._direction = -self._direction
+            self._target += self._direction
+
+    @property
+    def circle(self) -> tuple[float, float, float]:
+        """(x, y, radius) now."""
+        x, y = self.body.position
+        return x, y, self.spec.radius
+
+
+def circles_of(walkers: list[Walker]) -> np.ndarray:
+    """(M, 3) array of the walkers' discs."""
+    if not walkers:
+        return np.zeros((0, 3))
+    return np.array([w.circle for w in walkers])

@@ -1,0 +1,172 @@
+"""Worlds: wall segments, named places and walking people, loaded from JSON files.
+
+A world file (``data/worlds/<name>.json``) holds::
+
+    {
+      "name": "lab",
+      "description": "one line for people",
+      "walls": [[[x, y], [x, y], ...], ...],      # polylines, metres
+      "places": {"start": [x, y, theta], ...},     # theta in rad; "start" is required
+      "people": [{"name": "ana", "path": [[x, y], ...], "speed": 0.8,
+                  "radius": 0.25, "loop": true}]   # optional
+    }
+
+Every wall polyline becomes straight segments; a closed shape repeats its first point.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from abcwc.paths import data_dir
+from abcwc.types import Pose2D
+
+
+class WorldError(ValueError):
+    """A world file that cannot be used, with the reason and what is allowed."""
+
+
+@dataclass(frozen=True)
+class PersonSpec:
+    """A person who walks a path at constant speed (m/s), as a disc of ``radius`` (m)."""
+
+    name: str
+    path: np.ndarray  # (K, 2) waypoints
+    speed: float = 0.8
+    radius: float = 0.25
+    loop: bool = True
+
+
+@dataclass(frozen=True)
+class World:
+    """Static walls (N, 4: x1 y1 x2 y2), named places and people."""
+
+    name: str
+    walls: np.ndarray
+    places: dict[str, Pose2D]
+    people: tuple[PersonSpec, ...] = ()
+    description: str = ""
+    source: Path | None = field(default=None, compare=False)
+
+    @property
+    def start(self) -> Pose2D:
+        """Where the chair starts: the place called ``start``."""
+        return self.places["start"]
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` of all walls (m)."""
+        xs = np.concatenate([self.walls[:, 0], self.walls[:, 2]])
+        ys = np.concatenate([self.walls[:, 1], self.walls[:, 3]])
+        return float(xs.min()), float(ys.min()), float(xs.max()), float(ys.max())
+
+
+def available_worlds() -> list[str]:
+    """Names of the worlds shipped in ``data/worlds``."""
+    return sorted(p.stem for p in (data_dir() / "worlds").glob("*.json"))
+
+
+def _point(value: object, where: str) -> tuple[float, float]:
+    if (
+        not isinstance(value, (list, tuple))
+        or len(value) != 2
+        or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in value)
+    ):
+        raise WorldError(f"{where}: expected a point [x, y] of finite numbers, got {value!r}")
+    return float(value[0]), float(value[1])
+
+
+def world_from_dict(raw: dict, source: Path | None = None) -> World:
+    """Build and validate a :class:`World` from the parsed JSON structure."""
+    label = str(source) if source else "world"
+    if not isinstance(raw, dict):
+        raise WorldError(f"{label}: top level must be an object with walls and places")
+    missing = {"name", "walls", "places"} - raw.keys()
+    if missing:
+        raise WorldError(f"{label}: missing {', '.join(sorted(missing))} (need name, walls, places)")
+    unknown = raw.keys() - {"name", "walls", "places", "people", "description"}
+    if unknown:
+        raise WorldError(
+            f"{label}: unknown key(s) {', '.join(sorted(unknown))}; "
+            "allowed: name, description, walls, places, people"
+        )
+    segments = []
+    if not isinstance(raw["walls"], list) or not raw["walls"]:
+        raise WorldError(f"{label}: walls must be a non-empty list of polylines")
+    for i, line in enumerate(raw["walls"]):
+        if not isinstance(line, list) or len(line) < 2:
+            raise WorldError(f"{label}: walls[{i}] must be a list of at least 2 points")
+        pts = [_point(p, f"{label}: walls[{i}]") for p in line]
+        for a, b in zip(pts, pts[1:]):
+            if a == b:
+                raise WorldError(f"{label}: walls[{i}] has a zero-length segment at {a}")
+            segments.append((*a, *b))
+    places = {}
+    if not isinstance(raw["places"], dict):
+        raise WorldError(f"{label}: places must be an object of name: [x, y, theta]")
+    for name, value in raw["places"].items():
+        if (
+            not isinstance(value, list)
+            or len(value) != 3
+            or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in value)
+        ):
+            raise WorldError(f"{label}: place {name!r} must be [x, y, theta] (m, m, rad)")
+        places[name] = Pose2D(*map(float, value))
+    if "start" not in places:
+        raise WorldError(f"{label}: places must include 'start', the chair's start pose")
+    people = []
+    for i, person in enumerate(raw.get("people", [])):
+        if not isinstance(person, dict) or "path" not in person:
+            raise WorldError(f"{label}: people[{i}] must be an object with a path")
+        path = np.array([_point(p, f"{label}: people[{i}].path") for p in person["path"]])
+        speed = person.get("speed", 0.8)
+        radius = person.get("radius", 0.25)
+        if len(path) < 2:
+            raise WorldError(f"{label}: people[{i}].path needs at least 2 points")
+        if not (isinstance(speed, (int, float)) and 0 < speed <= 3):
+            raise WorldError(f"{label}: people[{i}].speed {speed!r} outside 0..3 m/s")
+        if not (isinstance(radius, (int, float)) and 0.05 <= radius <= 1):
+            raise WorldError(f"{label}: people[{i}].radius {radius!r} outside 0.05..1 m")
+        people.append(
+            PersonSpec(
+                name=str(person.get("name", f"person{i}")),
+                path=path,
+                speed=float(speed),
+                radius=float(radius),
+                loop=bool(person.get("loop", True)),
+            )
+        )
+    return World(
+        name=str(raw["name"]),
+        walls=np.array(segments, dtype=float),
+        places=places,
+        people=tuple(people),
+        description=str(raw.get("description", "")),
+        source=source,
+    )
+
+
+def load_world(name_or_path: str | Path) -> World:
+    """Load a world by name (``"lab"``, ``"floor"``) or from a JSON file path."""
+    candidate = Path(name_or_path)
+    if candidate.suffix == ".json" or candidate.exists():
+        path = candidate
+    else:
+        path = data_dir() / "worlds" / f"{name_or_path}.json"
+        if not path.exists():
+            raise WorldError(
+                f"unknown world {str(name_or_path)!r}; available: {', '.join(available_worlds())}"
+                " (or give a path to a .json world file)"
+            )
+    try:
+        raw = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise WorldError(f"world file {path} does not exist") from None
+    except json.JSONDecodeError as exc:
+        raise WorldError(f"{path}: not valid JSON ({exc})") from None
+    return world_from_dict(raw, source=path)

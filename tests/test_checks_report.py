@@ -1,0 +1,229 @@
+"""Tests for the exercise-check reporting core (abcwc.checks)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from abcwc import checks
+from abcwc.checks import (
+    CheckResult,
+    NotYet,
+    check,
+    checker,
+    expect,
+    expect_close,
+    expect_equal,
+    format_value,
+    use_or_fallback,
+)
+
+TABLE = {110: 110, 398: 253}
+
+
+def pot_mapping(fn) -> str:
+    for joystick, expected in TABLE.items():
+        expect_equal(fn(joystick), expected, what=f"joystick {joystick}", ref="eqn 1")
+    return f"all {len(TABLE)} thesis values match"
+
+
+def right(joystick: int) -> int:
+    return TABLE[joystick]
+
+
+def not_written(joystick: int) -> int:
+    # YOUR CODE HERE
+    raise NotImplementedError("pot_from_joystick: replace these lines with your code")
+
+
+def library_pot(joystick: int) -> int:
+    return TABLE[joystick]
+
+
+library_pot.__module__ = "abcwc.control.pots"  # as if it were the library's own
+
+
+def test_pass_prints_one_line_and_returns_a_truthy_result(capsys):
+    result = check("pot mapping", pot_mapping, right)
+    assert capsys.readouterr().out == "✔ pass — pot mapping: all 2 thesis values match\n"
+    assert result == CheckResult("pot mapping", True, "all 2 thesis values match")
+    assert result and result.passed
+    assert str(result) == result.line == "✔ pass — pot mapping: all 2 thesis values match"
+    assert repr(result) == "CheckResult('✔ pass — pot mapping: all 2 thesis values match')"
+
+
+def test_pass_without_a_message_says_ok(capsys):
+    check("trivial", lambda: None)
+    assert capsys.readouterr().out == "✔ pass — trivial: ok\n"
+
+
+def test_wrong_answer_says_got_and_expected(capsys):
+    result = check("pot mapping", pot_mapping, lambda joystick: 250)
+    assert capsys.readouterr().out == (
+        "… not yet — pot mapping: joystick 110 gave 250, expected 110 (eqn 1)\n"
+    )
+    assert not result
+    assert result.message == "joystick 110 gave 250, expected 110 (eqn 1)"
+
+
+def test_unwritten_exercise_is_not_yet_not_an_error(capsys):
+    result = check("pot mapping", pot_mapping, not_written)
+    assert capsys.readouterr().out == (
+        "… not yet — pot mapping: not written yet "
+        "(the cell above still raises NotImplementedError)\n"
+    )
+    assert not result
+
+
+def test_exception_from_student_code_is_named_without_traceback(capsys):
+    def broken(joystick: int) -> int:
+        raise ValueError(f"fb pot {joystick + 302} outside 110..398\n(second line)")
+
+    result = check("pot mapping", pot_mapping, broken)
+    out = capsys.readouterr().out
+    assert out == (
+        "… not yet — pot mapping: your code raised ValueError: "
+        "fb pot 412 outside 110..398 (second line)\n"
+    )
+    assert "Traceback" not in out
+    assert not result
+
+
+def test_exception_without_message_and_long_messages(capsys):
+    check("a", lambda: {}["missing"])
+    check("b", lambda: (_ for _ in ()).throw(RuntimeError()))
+    check("c", lambda: expect(False, "x" * 1000))
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "… not yet — a: your code raised KeyError: 'missing'"
+    assert lines[1] == "… not yet — b: your code raised RuntimeError"
+    assert lines[2].endswith("x…") and len(lines[2]) < 400
+
+
+def test_interrupts_are_not_swallowed():
+    def interrupted():
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        check("stop", interrupted)
+
+
+def test_checker_decorator_keeps_name_and_returns_result(capsys):
+    @checker("pot mapping")
+    def check_pot_mapping(fn) -> str:
+        """Compare with the thesis table."""
+        return pot_mapping(fn)
+
+    assert check_pot_mapping.__name__ == "check_pot_mapping"
+    assert check_pot_mapping.__doc__ == "Compare with the thesis table."
+    assert check_pot_mapping(right).passed
+    assert not check_pot_mapping(fn=not_written).passed
+    assert capsys.readouterr().out.splitlines() == [
+        "✔ pass — pot mapping: all 2 thesis values match",
+        "… not yet — pot mapping: not written yet "
+        "(the cell above still raises NotImplementedError)",
+    ]
+
+
+def test_use_or_fallback_picks_and_says_which(capsys):
+    passed = CheckResult("pot mapping", True, "ok")
+    failed = CheckResult("pot mapping", False, "not written yet")
+    assert use_or_fallback(right, library_pot, passed) is right
+    assert use_or_fallback(not_written, library_pot, failed) is library_pot
+    assert use_or_fallback(not_written, np.hypot, False) is np.hypot
+    assert capsys.readouterr().out.splitlines() == [
+        "→ the rest of this notebook uses your right",
+        "→ the rest of this notebook uses abcwc's own library_pot "
+        "(from abcwc.control.pots) instead",
+        "→ the rest of this notebook uses abcwc's own hypot instead",
+    ]
+
+
+# --- comparisons ----------------------------------------------------------------------
+
+
+def message_of(fn, *args, **kwargs) -> str:
+    with pytest.raises(NotYet) as info:
+        fn(*args, **kwargs)
+    return str(info.value)
+
+
+def test_expect_close_scalars_with_tolerance_and_units():
+    expect_close(0.94248, 0.942478, what="1000 ticks", atol=1e-4)
+    expect_close(np.float32(2.5), 2.5, what="x")
+    assert (
+        message_of(
+            expect_close,
+            0.95,
+            0.942478,
+            what="1000 ticks",
+            atol=1e-3,
+            rtol=0,
+            unit="m",
+            ref="circumference",
+        )
+        == "1000 ticks gave 0.95 m, expected 0.942478 m ± 0.001 m (circumference)"
+    )
+    assert message_of(expect_close, 250, 253, what="joystick 398", rtol=0, ref="eqn 1") == (
+        "joystick 398 gave 250, expected 253 (eqn 1)"
+    )
+
+
+def test_expect_close_arrays_names_first_mismatch_and_count():
+    expected = np.linspace(0.0, 1.0, 5)
+    expect_close(expected + 1e-9, expected, what="x", atol=1e-6)
+    got = expected.copy()
+    got[[2, 4]] += 0.1
+    assert message_of(expect_close, got, expected, what="pose x", atol=0.01, rtol=0) == (
+        "pose x[2] gave 0.6, expected 0.5 ± 0.01 (2 of 5 values differ)"
+    )
+    grid = np.zeros((2, 3))
+    bad = grid.copy()
+    bad[1, 2] = 1
+    assert message_of(expect_close, bad, grid, what="grid", ref="eqn 3", atol=0.5) == (
+        "grid[1, 2] gave 1, expected 0 ± 0.5 (eqn 3; 1 of 6 values differ)"
+    )
+
+
+def test_expect_close_rejects_wrong_types_and_shapes():
+    assert message_of(expect_close, None, 0.5, what="v") == (
+        "v gave None, expected a number like 0.5"
+    )
+    assert message_of(expect_close, "fast", 0.5, what="v") == (
+        "v gave 'fast', expected a number like 0.5"
+    )
+    assert message_of(expect_close, [1.0, 2.0], 0.5, what="v") == (
+        "v gave an array of shape (2,), expected a single number"
+    )
+    assert message_of(expect_close, [1.0], [1.0, 2.0], what="v", ref="table 6") == (
+        "v gave an array of shape (1,), expected an array of shape (2,) (table 6)"
+    )
+
+
+def test_expect_close_nan_equals_nan_only():
+    expect_close(float("nan"), float("nan"), what="x")
+    assert message_of(expect_close, float("nan"), 1.0, what="x") == (
+        "x gave nan, expected 1 ± 1e-06"
+    )
+
+
+def test_expect_equal_handles_arrays_and_tuples():
+    expect_equal((1, 2), (1, 2), what="pots")
+    expect_equal(np.arange(3), np.arange(3), what="ticks")
+    expect_equal([0, 1, 2], np.arange(3), what="ticks")
+    assert message_of(expect_equal, (1, 3), (1, 2), what="pots") == (
+        "pots gave (1, 3), expected (1, 2)"
+    )
+    assert message_of(expect_equal, np.zeros(2), np.zeros(3), what="a").startswith("a gave array(")
+
+
+def test_format_value_is_short_and_deterministic():
+    assert format_value(np.int64(3)) == "3"
+    assert format_value(np.float64(1 / 3)) == "0.333333"
+    assert format_value(True) == "True"
+    assert format_value(np.array(2.5)) == "2.5"
+    assert format_value("x" * 100).endswith("…") and len(format_value("x" * 100)) == 60
+
+
+def test_package_reexports_the_api():
+    assert set(checks.__all__) <= set(dir(checks))
+    assert checks.check is check and checks.PASS == "✔ pass" and checks.NOT_YET == "… not yet"

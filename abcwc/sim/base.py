@@ -72,7 +72,9 @@ class SimBase:
         self.sonar = Sonar(p.sonar, rngs[2])
         self.ir = IrRing(p.ir, rngs[3])
         self.lidar = ScanSensor(p.lidar, rngs[4]) if lidar else None
-        self.depth_camera = ScanSensor(p.depth_scan, rngs[5], depth_noise=True) if depth_scan else None
+        self.depth_camera = (
+            ScanSensor(p.depth_scan, rngs[5], depth_noise=True) if depth_scan else None
+        )
         self._build_space(self._start_pose(start), people)
         self.t = 0.0
         self.steps = 0

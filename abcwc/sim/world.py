@@ -88,7 +88,9 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
         raise WorldError(f"{label}: top level must be an object with walls and places")
     missing = {"name", "walls", "places"} - raw.keys()
     if missing:
-        raise WorldError(f"{label}: missing {', '.join(sorted(missing))} (need name, walls, places)")
+        raise WorldError(
+            f"{label}: missing {', '.join(sorted(missing))} (need name, walls, places)"
+        )
     unknown = raw.keys() - {"name", "walls", "places", "people", "description"}
     if unknown:
         raise WorldError(

@@ -1,0 +1,132 @@
+"""Time plots of a run's signals, one panel per signal on a shared time axis."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
+
+from abcwc.log import RunLog
+from abcwc.params import default_params
+from abcwc.viz._common import decimate
+
+
+def true_velocity(log: RunLog) -> tuple[np.ndarray, np.ndarray]:
+    """Forward speed v (m/s) and turn rate w (rad/s) per row from the true poses."""
+    pose, dt = log.pose, log.period or 1.0
+    if len(pose) < 2:
+        return np.zeros(len(pose)), np.zeros(len(pose))
+    dx, dy = np.gradient(pose[:, 0]), np.gradient(pose[:, 1])
+    v = (np.cos(pose[:, 2]) * dx + np.sin(pose[:, 2]) * dy) / dt
+    return v, np.gradient(np.unwrap(pose[:, 2])) / dt
+
+
+def encoder_velocity(log: RunLog) -> tuple[np.ndarray, np.ndarray]:
+    """v (m/s) and w (rad/s) from the encoder counts (nominal wheel sizes)."""
+    p, dt = default_params(), log.period or 1.0
+    if len(log) < 2:
+        return np.zeros(len(log)), np.zeros(len(log))
+    wheels = np.gradient(log.ticks.astype(float), axis=0) * p.distance_per_count / dt
+    return wheels.mean(axis=1), (wheels[:, 1] - wheels[:, 0]) / p.wheel_base
+
+
+def _has_pose(log: RunLog) -> bool:
+    return bool(np.isfinite(log.pose[:, :2]).any())
+
+
+def _velocity(log: RunLog, rows: np.ndarray, ax: Axes, which: int, unit: str) -> None:
+    source = true_velocity(log) if _has_pose(log) else encoder_velocity(log)
+    name = "true" if _has_pose(log) else "encoders"
+    ax.plot(log.t[rows], source[which][rows], label=name)
+    command = log.cmd_twist[rows, which]
+    if np.isfinite(command).any():
+        ax.plot(log.t[rows], command, "--", label="commanded")
+    ax.set_ylabel(unit)
+
+
+def _v(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
+    _velocity(log, rows, ax, 0, "v (m/s)")
+
+
+def _w(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
+    _velocity(log, rows, ax, 1, "w (rad/s)")
+
+
+def _pots(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
+    for col, name in enumerate(("fb", "lr")):
+        (line,) = ax.plot(log.t[rows], log.pots[rows, col], label=f"{name} on pot")
+        sent = log.cmd_pots[rows, col].astype(float)
+        sent[sent < 0] = np.nan
+        if np.isfinite(sent).any():
+            ax.plot(log.t[rows], sent, "--", color=line.get_color(), label=f"{name} sent")
+    ax.axhline(default_params().pot_neutral, color="0.6", linewidth=0.8)
+    ax.set_ylim(0, 260)
+    ax.set_ylabel("pot byte")
+
+
+def _sonar(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
+    ax.plot(log.t[rows], log.sonar[rows], label="sonar")
+    ax.set_ylabel("sonar (m)")
+
+
+def _ir(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
+    readings = np.where(np.isfinite(log.ir[rows]), log.ir[rows], np.nan)
+    for k in range(readings.shape[1]):
+        ax.plot(log.t[rows], readings[:, k], label=f"IR {k}")
+    ax.set_ylabel("IR (m)")
+
+
+def _ticks(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
+    ax.plot(log.t[rows], log.ticks[rows, 0], label="left")
+    ax.plot(log.t[rows], log.ticks[rows, 1], label="right")
+    ax.set_ylabel("encoder counts")
+
+
+def _gyro(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
+    ax.plot(log.t[rows], log.gyro_z[rows], linewidth=0.8, label="gyro z")
+    ax.set_ylabel("gyro (rad/s)")
+
+
+def _collisions(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
+    ax.step(log.t[rows], log.collisions[rows], where="post", color="tab:red",
+            label="collisions")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_ylabel("collisions")
+
+
+SIGNALS: dict[str, Callable[[RunLog, np.ndarray, Axes], None]] = {
+    "v": _v, "w": _w, "pots": _pots, "sonar": _sonar, "ir": _ir, "ticks": _ticks,
+    "gyro": _gyro, "collisions": _collisions,
+}
+
+
+def plot_signals(log: RunLog, names: Sequence[str] = ("v", "w", "pots", "sonar"),
+                 max_points: int = 4000, figsize: tuple[float, float] | None = None) -> Figure:
+    """Time plots of ``names``, one panel each, sharing the time axis.
+
+    Names: ``v`` and ``w`` (true speed and turn rate, or from the encoders on a real
+    chair, with the commanded Twist dashed), ``pots`` (bytes on the pot, sent ones
+    dashed), ``sonar``, ``ir``, ``ticks``, ``gyro``, ``collisions``. Long logs are
+    thinned to ``max_points`` samples. Returns the Figure.
+    """
+    import matplotlib.pyplot as plt
+
+    names = [names] if isinstance(names, str) else list(names)
+    unknown = [n for n in names if n not in SIGNALS]
+    if unknown or not names:
+        raise ValueError(f"unknown signal(s) {unknown or names}; choose from {', '.join(SIGNALS)}")
+    if len(log) == 0:
+        raise ValueError("the log is empty: nothing to plot")
+    size = figsize or (8.0, 1.2 + 1.6 * len(names))
+    fig, axes = plt.subplots(len(names), 1, sharex=True, figsize=size, layout="constrained",
+                             squeeze=False)
+    rows = decimate(len(log), max_points)
+    for name, ax in zip(names, axes[:, 0]):
+        SIGNALS[name](log, rows, ax)
+        ax.grid(True, color="0.9", linewidth=0.6)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
+    axes[-1, 0].set_xlabel("t (s)")
+    return fig

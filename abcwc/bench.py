@@ -50,6 +50,35 @@ def bench_sim() -> dict[str, float]:
     }
 
 
+_NOTEBOOK_RUNNER = """
+import resource, sys, time
+import nbformat
+from nbclient import NotebookClient
+nb = nbformat.read(sys.argv[1], as_version=4)
+start = time.perf_counter()
+NotebookClient(nb, timeout=600, kernel_name="python3").execute()
+seconds = time.perf_counter() - start
+print(seconds, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
+"""
+
+
+@benchmark("notebooks", "each solution notebook: execution time (s) and kernel peak memory (MB)")
+def bench_notebooks() -> dict[str, float]:
+    import subprocess
+    import sys
+
+    from abcwc.paths import REPO_ROOT
+
+    figures: dict[str, float] = {}
+    for path in sorted((REPO_ROOT / "solutions").glob("*.ipynb")):
+        done = subprocess.run([sys.executable, "-c", _NOTEBOOK_RUNNER, str(path)],
+                              capture_output=True, text=True, check=True, cwd=path.parent)
+        seconds, max_rss_kb = done.stdout.split()[-2:]
+        figures[f"{path.stem}: seconds"] = float(seconds)
+        figures[f"{path.stem}: peak MB"] = int(max_rss_kb) / 1024
+    return figures
+
+
 def run_benchmarks(names: list[str] | None = None, repeats: int = 3) -> dict[str, dict]:
     """Run the named benchmarks (all if None); medians of ``repeats`` runs."""
     names = names or list(BENCHMARKS)

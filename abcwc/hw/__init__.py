@@ -1,0 +1,1 @@
+"""Talking to the real chair: the serial wire protocol (``abcwc.hw.protocol``)."""

@@ -1,0 +1,587 @@
+"""The abcwc serial protocol between a host and the chair's Arduino.
+
+The Python twin of ``firmware/core/protocol.c``; the byte layout is described in
+``firmware/PROTOCOL.md`` and the two implementations are cross-checked by
+``tests/firmware``.
+
+A frame before stuffing is ``version, type, seq, payload..., crc16`` where the
+CRC-16/CCITT-FALSE (polynomial 0x1021, initial value 0xFFFF) covers
+version..payload and is sent little-endian. On the wire each frame is
+COBS-encoded (Cheshire & Baker, 1999) and followed by one ``0x00`` delimiter.
+All multi-byte fields are little-endian. The link runs at 115200 baud, 8N1.
+
+This module also holds the integer velocity controller that the firmware runs
+(``twist_to_pot_bytes_int``) and the thesis's joystick-to-pot map (eqn 1), so
+that the simulator and the chair turn a twist into exactly the same pot bytes.
+
+Example::
+
+    >>> frame = encode(SetTwist(seq=7, v_mm_s=500, w_mrad_s=-300))
+    >>> frame.hex(" ")
+    '0a 01 03 07 f4 01 d4 fe 25 55 00'
+    >>> FrameDecoder().feed(frame)
+    [SetTwist(seq=7, v_mm_s=500, w_mrad_s=-300)]
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass, fields
+from typing import ClassVar
+
+__all__ = [
+    "PROTOCOL_VERSION",
+    "BAUD_RATE",
+    "MsgType",
+    "Flag",
+    "HelloReason",
+    "POT_NEUTRAL",
+    "POT_MIN",
+    "POT_MAX",
+    "JOY_CENTRE",
+    "JOY_MIN",
+    "JOY_MAX",
+    "JOY_DEAD_LO",
+    "JOY_DEAD_HI",
+    "JOY_FAULT_LO",
+    "JOY_FAULT_HI",
+    "V_MAX_MM_S",
+    "W_MAX_MRAD_S",
+    "MOTOR_DEAD_BAND",
+    "POT_SPAN",
+    "POT_MAX_OFFSET",
+    "WATCHDOG_TIMEOUT_MS",
+    "TELEMETRY_PERIOD_MS",
+    "GYRO_LSB_PER_DEG_S",
+    "ENC_COUNTS_PER_ENCODER_TURN",
+    "Heartbeat",
+    "SetPots",
+    "SetTwist",
+    "Stop",
+    "Configure",
+    "HelloRequest",
+    "Hello",
+    "Telemetry",
+    "Message",
+    "ProtocolError",
+    "crc16",
+    "cobs_encode",
+    "cobs_decode",
+    "encode",
+    "decode_frame",
+    "FrameDecoder",
+    "pot_clamp",
+    "joystick_to_pot",
+    "joystick_state",
+    "axis_offset",
+    "twist_to_pot_bytes_int",
+    "apply_speed_cap",
+    "tick_delta",
+]
+
+PROTOCOL_VERSION = 1
+BAUD_RATE = 115200
+
+# --- pot and joystick scales (firmware/core/pots.h) ---------------------------
+POT_NEUTRAL = 128
+"""Pot byte for no motion on either channel."""
+POT_MIN = 8
+"""Lowest pot byte ever written: eqn 1 of JOY_MIN."""
+POT_MAX = 253
+"""Highest pot byte ever written: eqn 1 of JOY_MAX."""
+JOY_CENTRE = 254
+"""Joystick ADC reading at rest, on the thesis's "pot scale"."""
+JOY_MIN = 110
+JOY_MAX = 398
+JOY_DEAD_LO = 248
+"""A joystick channel inside JOY_DEAD_LO..JOY_DEAD_HI (inclusive) is neutral."""
+JOY_DEAD_HI = 260
+JOY_FAULT_LO = 60
+"""Joystick readings below this or above JOY_FAULT_HI mean a wiring fault."""
+JOY_FAULT_HI = 450
+
+# --- velocity controller (thesis table 2, eqn 2, appendix A.14) -------------------
+V_MAX_MM_S = 1667
+"""Full forward speed, mm/s (6 km/h, thesis table 2)."""
+W_MAX_MRAD_S = 1571
+"""Full turn rate, mrad/s (90 deg/s)."""
+MOTOR_DEAD_BAND = 2
+"""The motor controller ignores |byte - 128| <= 2."""
+POT_SPAN = 123
+"""Offsets 3..125 from neutral cover zero to full speed."""
+POT_MAX_OFFSET = 125
+
+WATCHDOG_TIMEOUT_MS = 250
+"""The chair drops a held command after this long without a valid frame, ms."""
+TELEMETRY_PERIOD_MS = 20
+"""Default telemetry period, ms (50 Hz)."""
+GYRO_LSB_PER_DEG_S = 65.5
+"""MPU9250 gyro scale at +-500 deg/s: raw counts per deg/s."""
+ENC_COUNTS_PER_ENCODER_TURN = 400
+"""Counts per turn of an encoder wheel (x1 decoding)."""
+
+
+class MsgType:
+    """Message type bytes. Host -> chair are below 0x80, chair -> host above."""
+
+    HEARTBEAT = 0x01
+    SET_POTS = 0x02
+    SET_TWIST = 0x03
+    STOP = 0x04
+    CONFIGURE = 0x05
+    HELLO_REQUEST = 0x06
+    HELLO = 0x81
+    TELEMETRY = 0x82
+
+
+class Flag:
+    """Bits of ``Telemetry.flags``."""
+
+    JOYSTICK_OVERRIDE = 0x01
+    """The joystick is deflected and drives the pots."""
+    WATCHDOG_TRIPPED = 0x02
+    """No valid frame for 250 ms: the host command was dropped, pots neutral."""
+    JOYSTICK_FAULT = 0x04
+    """A joystick reading is implausible (disconnected?): pots neutral."""
+    IMU_FAULT = 0x08
+    """The gyro did not answer; gyro_z_raw is 0."""
+    SPEED_CAPPED = 0x10
+    """The host command was limited by the speed cap or the safe range."""
+    HOST_ACTIVE = 0x20
+    """The pots follow a host command."""
+
+    NAMES: ClassVar[dict[int, str]] = {
+        0x01: "JOYSTICK_OVERRIDE",
+        0x02: "WATCHDOG_TRIPPED",
+        0x04: "JOYSTICK_FAULT",
+        0x08: "IMU_FAULT",
+        0x10: "SPEED_CAPPED",
+        0x20: "HOST_ACTIVE",
+    }
+
+    @classmethod
+    def describe(cls, flags: int) -> list[str]:
+        """Names of the bits set in ``flags``, lowest bit first."""
+        return [name for bit, name in cls.NAMES.items() if flags & bit]
+
+
+class HelloReason:
+    """Why the chair sent a HELLO."""
+
+    BOOT = 0
+    REQUEST = 1
+    PERIODIC = 2
+
+
+class ProtocolError(ValueError):
+    """A frame or a field value that the protocol does not allow."""
+
+
+# --- messages -----------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Heartbeat:
+    """Host -> chair: keeps the chair's 250 ms watchdog fed, nothing else."""
+
+    seq: int = 0
+    TYPE: ClassVar[int] = MsgType.HEARTBEAT
+    FORMAT: ClassVar[str] = "<"
+
+
+@dataclass(frozen=True)
+class SetPots:
+    """Host -> chair: drive the pots directly.
+
+    ``fb`` and ``lr`` are pot bytes 0..255 (128 neutral; FB above 128 forward,
+    LR below 128 turns left). The chair clamps them into 8..253 and the speed cap.
+    """
+
+    seq: int = 0
+    fb: int = POT_NEUTRAL
+    lr: int = POT_NEUTRAL
+    TYPE: ClassVar[int] = MsgType.SET_POTS
+    FORMAT: ClassVar[str] = "<BB"
+
+
+@dataclass(frozen=True)
+class SetTwist:
+    """Host -> chair: drive at a linear speed ``v_mm_s`` (mm/s, + forward) and a
+    turn rate ``w_mrad_s`` (mrad/s, + counter-clockwise), both int16.
+
+    The chair turns it into pot bytes with ``twist_to_pot_bytes_int``.
+    """
+
+    seq: int = 0
+    v_mm_s: int = 0
+    w_mrad_s: int = 0
+    TYPE: ClassVar[int] = MsgType.SET_TWIST
+    FORMAT: ClassVar[str] = "<hh"
+
+
+@dataclass(frozen=True)
+class Stop:
+    """Host -> chair: pots to neutral now (the host stays in charge)."""
+
+    seq: int = 0
+    TYPE: ClassVar[int] = MsgType.STOP
+    FORMAT: ClassVar[str] = "<"
+
+
+@dataclass(frozen=True)
+class Configure:
+    """Host -> chair: speed caps and telemetry rate.
+
+    ``cap_fb`` / ``cap_lr``: the largest |pot byte - 128| allowed for host
+    commands on each channel, 0..125 (more means 125; the joystick is never
+    capped). ``telemetry_period_ms``: 10..255 ms (0 = the default 20 ms; below 10
+    means 10).
+    """
+
+    seq: int = 0
+    cap_fb: int = POT_MAX_OFFSET
+    cap_lr: int = POT_MAX_OFFSET
+    telemetry_period_ms: int = 0
+    TYPE: ClassVar[int] = MsgType.CONFIGURE
+    FORMAT: ClassVar[str] = "<BBB"
+
+
+@dataclass(frozen=True)
+class HelloRequest:
+    """Host -> chair: please send a HELLO now."""
+
+    seq: int = 0
+    TYPE: ClassVar[int] = MsgType.HELLO_REQUEST
+    FORMAT: ClassVar[str] = "<"
+
+
+@dataclass(frozen=True)
+class Hello:
+    """Chair -> host: sent at boot, on request, and every 500 ms until the
+    host's first valid frame. ``reset_flags`` is the AVR's MCUSR at boot
+    (1 power-on, 2 external/reset button, 4 brown-out, 8 watchdog)."""
+
+    seq: int = 0
+    protocol_version: int = PROTOCOL_VERSION
+    fw_major: int = 0
+    fw_minor: int = 0
+    fw_patch: int = 0
+    reason: int = HelloReason.BOOT
+    reset_flags: int = 0
+    TYPE: ClassVar[int] = MsgType.HELLO
+    FORMAT: ClassVar[str] = "<BBBBBB"
+
+    @property
+    def fw_version(self) -> str:
+        """Firmware version as ``"major.minor.patch"``."""
+        return f"{self.fw_major}.{self.fw_minor}.{self.fw_patch}"
+
+
+@dataclass(frozen=True)
+class Telemetry:
+    """Chair -> host, every 20 ms by default.
+
+    Attributes:
+        seq: the chair's frame counter (shared with HELLO), wraps at 256.
+        time_ms: chair clock, ms since boot (uint32, wraps).
+        enc_left, enc_right: encoder counts (int32, wrap), + when that wheel
+            drives forward; use ``tick_delta`` for differences.
+        gyro_z_raw: gyro z, 65.5 counts per deg/s, + counter-clockwise.
+        sonar_mm: sonar range, mm; 0 = no reading in the last 300 ms.
+        joy_fb, joy_lr: joystick ADC readings, pot scale (centre 254).
+        pot_fb, pot_lr: the pot bytes the chair is driving.
+        flags: ``Flag`` bits.
+        bad_frames: frames the chair dropped since boot (uint16, wraps).
+        last_cmd_seq: seq of the last valid host frame.
+        loops: main-loop passes since the previous telemetry.
+        cap_fb, cap_lr: the speed caps in force.
+    """
+
+    seq: int = 0
+    time_ms: int = 0
+    enc_left: int = 0
+    enc_right: int = 0
+    gyro_z_raw: int = 0
+    sonar_mm: int = 0
+    joy_fb: int = JOY_CENTRE
+    joy_lr: int = JOY_CENTRE
+    pot_fb: int = POT_NEUTRAL
+    pot_lr: int = POT_NEUTRAL
+    flags: int = 0
+    bad_frames: int = 0
+    last_cmd_seq: int = 0
+    loops: int = 0
+    cap_fb: int = POT_MAX_OFFSET
+    cap_lr: int = POT_MAX_OFFSET
+    TYPE: ClassVar[int] = MsgType.TELEMETRY
+    FORMAT: ClassVar[str] = "<IiihHHHBBBHBHBB"
+
+    @property
+    def gyro_z_rad_s(self) -> float:
+        """Gyro z in rad/s (+ counter-clockwise)."""
+        return self.gyro_z_raw / GYRO_LSB_PER_DEG_S * 0.017453292519943295
+
+    @property
+    def sonar_m(self) -> float | None:
+        """Sonar range in metres, or None without a recent reading."""
+        return self.sonar_mm / 1000.0 if self.sonar_mm else None
+
+
+Message = Heartbeat | SetPots | SetTwist | Stop | Configure | HelloRequest | Hello | Telemetry
+
+_CLASSES: dict[int, type] = {
+    cls.TYPE: cls
+    for cls in (Heartbeat, SetPots, SetTwist, Stop, Configure, HelloRequest, Hello, Telemetry)
+}
+_HEADER = struct.Struct("<BBB")
+_CRC = struct.Struct("<H")
+MAX_PAYLOAD = max(struct.calcsize(c.FORMAT) for c in _CLASSES.values())
+MAX_RAW = _HEADER.size + MAX_PAYLOAD + _CRC.size
+MAX_ENCODED = MAX_RAW + MAX_RAW // 254 + 1
+"""Longest valid frame on the wire, without its delimiter."""
+
+
+# --- CRC and COBS -------------------------------------------------------------------
+
+
+def _make_crc_table() -> list[int]:
+    table = []
+    for byte in range(256):
+        crc = byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else (crc << 1)
+            crc &= 0xFFFF
+        table.append(crc)
+    return table
+
+
+_CRC_TABLE = _make_crc_table()
+
+
+def crc16(data: bytes, crc: int = 0xFFFF) -> int:
+    """CRC-16/CCITT-FALSE of ``data`` (``crc16(b"123456789") == 0x29B1``)."""
+    for byte in data:
+        crc = ((crc << 8) & 0xFFFF) ^ _CRC_TABLE[(crc >> 8) ^ byte]
+    return crc
+
+
+def cobs_encode(data: bytes) -> bytes:
+    """COBS-encode ``data`` (no delimiter added); the result has no zero byte."""
+    out = bytearray(b"\x00")
+    code_pos = 0
+    code = 1
+    n = len(data)
+    for i, byte in enumerate(data):
+        if byte == 0:
+            out[code_pos] = code
+            code_pos = len(out)
+            out.append(0)
+            code = 1
+        else:
+            out.append(byte)
+            code += 1
+            if code == 0xFF and i + 1 < n:
+                out[code_pos] = code
+                code_pos = len(out)
+                out.append(0)
+                code = 1
+    out[code_pos] = code
+    return bytes(out)
+
+
+def cobs_decode(data: bytes) -> bytes:
+    """Decode one COBS frame (delimiter removed).
+
+    Raises:
+        ProtocolError: if ``data`` holds a zero byte or a group runs past the end.
+    """
+    out = bytearray()
+    i = 0
+    n = len(data)
+    while i < n:
+        code = data[i]
+        i += 1
+        if code == 0:
+            raise ProtocolError("COBS: zero byte inside a frame")
+        end = i + code - 1
+        if end > n:
+            raise ProtocolError("COBS: group runs past the end of the frame")
+        chunk = data[i:end]
+        if 0 in chunk:
+            raise ProtocolError("COBS: zero byte inside a frame")
+        out += chunk
+        i = end
+        if code != 0xFF and i < n:
+            out.append(0)
+    return bytes(out)
+
+
+# --- frames -------------------------------------------------------------------------
+
+
+def _check_fields(msg: Message) -> tuple[int, ...]:
+    cls = type(msg)
+    values = tuple(getattr(msg, f.name) for f in fields(msg) if f.name != "seq")
+    if not 0 <= msg.seq <= 255:
+        raise ProtocolError(f"seq {msg.seq} outside 0..255")
+    try:
+        struct.pack(cls.FORMAT, *values)
+    except struct.error as exc:
+        raise ProtocolError(f"{cls.__name__}{values}: a field is out of range ({exc})") from exc
+    return values
+
+
+def encode(msg: Message) -> bytes:
+    """The complete wire frame for ``msg``: COBS bytes plus the 0x00 delimiter.
+
+    Raises:
+        ProtocolError: if a field does not fit its wire type (for example
+            ``SetTwist(v_mm_s=40000)``: int16 is -32768..32767).
+    """
+    values = _check_fields(msg)
+    raw = _HEADER.pack(PROTOCOL_VERSION, msg.TYPE, msg.seq) + struct.pack(msg.FORMAT, *values)
+    raw += _CRC.pack(crc16(raw))
+    return cobs_encode(raw) + b"\x00"
+
+
+def decode_frame(frame: bytes) -> Message:
+    """Decode one frame's COBS bytes (without the 0x00 delimiter).
+
+    Raises:
+        ProtocolError: bad COBS, short frame, CRC mismatch, other protocol
+            version, unknown type or wrong payload length.
+    """
+    raw = cobs_decode(frame)
+    if len(raw) < _HEADER.size + _CRC.size:
+        raise ProtocolError(f"frame of {len(raw)} bytes is shorter than a header and CRC")
+    body, (crc,) = raw[:-2], _CRC.unpack(raw[-2:])
+    if crc16(body) != crc:
+        raise ProtocolError(f"CRC mismatch: frame says {crc:#06x}, bytes give {crc16(body):#06x}")
+    version, mtype, seq = _HEADER.unpack(body[:3])
+    if version != PROTOCOL_VERSION:
+        raise ProtocolError(f"protocol version {version}, expected {PROTOCOL_VERSION}")
+    cls = _CLASSES.get(mtype)
+    if cls is None:
+        raise ProtocolError(f"unknown message type {mtype:#04x}")
+    payload = body[3:]
+    if len(payload) != struct.calcsize(cls.FORMAT):
+        raise ProtocolError(
+            f"{cls.__name__} payload is {len(payload)} bytes, expected "
+            f"{struct.calcsize(cls.FORMAT)}"
+        )
+    return cls(seq, *struct.unpack(cls.FORMAT, payload))
+
+
+class FrameDecoder:
+    """Streaming decoder: feed it bytes as they come, get whole messages back.
+
+    Bad frames are dropped and counted in ``bad_frames``, with the reason of the
+    last one in ``last_error``; the decoder resynchronises at the next 0x00.
+    Empty frames (two delimiters in a row) are ignored and not counted, the same
+    rules as the chair's parser.
+    """
+
+    def __init__(self) -> None:
+        self._buf = bytearray()
+        self._overflow = False
+        self.bad_frames = 0
+        """Frames dropped so far."""
+        self.last_error: str | None = None
+        """Why the last bad frame was dropped."""
+
+    def feed(self, data: bytes) -> list[Message]:
+        """Consume ``data``; return the messages completed by it, in order."""
+        out: list[Message] = []
+        for byte in data:
+            if byte != 0:
+                if len(self._buf) < MAX_ENCODED:
+                    self._buf.append(byte)
+                else:
+                    self._overflow = True
+                continue
+            if not self._buf and not self._overflow:
+                continue
+            try:
+                if self._overflow:
+                    raise ProtocolError(f"frame longer than {MAX_ENCODED} bytes")
+                out.append(decode_frame(bytes(self._buf)))
+            except ProtocolError as exc:
+                self.bad_frames += 1
+                self.last_error = str(exc)
+            self._buf.clear()
+            self._overflow = False
+        return out
+
+
+# --- pot maps and the velocity controller (firmware/core/pots.c) ---------------------
+
+
+def pot_clamp(value: int) -> int:
+    """Clamp an integer into the safe pot range POT_MIN..POT_MAX (8..253)."""
+    return min(max(int(value), POT_MIN), POT_MAX)
+
+
+def joystick_to_pot(adc: int) -> int:
+    """Thesis eqn 1 in integers: ``(adc - 100) * 85 // 100`` after clamping the
+    reading into 110..398, so 110 -> 8, 254 -> 130, 398 -> 253."""
+    a = min(max(int(adc), JOY_MIN), JOY_MAX)
+    return pot_clamp((a - 100) * 85 // 100)
+
+
+def joystick_state(fb_adc: int, lr_adc: int) -> str:
+    """``"fault"`` if a reading is outside 60..450, else ``"deflected"`` if a
+    channel is outside the dead band 248..260, else ``"neutral"``."""
+    readings = (fb_adc, lr_adc)
+    if any(r < JOY_FAULT_LO or r > JOY_FAULT_HI for r in readings):
+        return "fault"
+    if any(r < JOY_DEAD_LO or r > JOY_DEAD_HI for r in readings):
+        return "deflected"
+    return "neutral"
+
+
+def axis_offset(value: int, max_value: int) -> int:
+    """Pot offset for one axis: 0 for standstill, else 3..125 (more beyond
+    ``max_value``); ``round(|value| * 123 / max_value)`` in integers, plus the
+    motor controller's dead band of 2."""
+    if value == 0 or max_value <= 0:
+        return 0
+    mag = (min(abs(int(value)), 1_000_000) * POT_SPAN + max_value // 2) // max_value
+    return 0 if mag == 0 else MOTOR_DEAD_BAND + mag
+
+
+def twist_to_pot_bytes_int(v_mm_s: int, w_mrad_s: int) -> tuple[int, int]:
+    """The chair's calibrated velocity controller, bit for bit as in the firmware.
+
+    Args:
+        v_mm_s: linear speed, mm/s, + forward (int16 on the wire).
+        w_mrad_s: turn rate, mrad/s, + counter-clockwise / left (ROS REP 103).
+
+    Returns:
+        ``(fb, lr)`` pot bytes in 8..253: FB above 128 drives forward, LR below
+        128 turns left. 1667 mm/s (6 km/h) and 1571 mrad/s (90 deg/s) are full
+        scale (thesis table 2, eqn 2, appendix A.14).
+    """
+    v, w = int(v_mm_s), int(w_mrad_s)
+    fb_off = axis_offset(v, V_MAX_MM_S)
+    lr_off = axis_offset(w, W_MAX_MRAD_S)
+    if v < 0:
+        fb_off = -fb_off
+    if w < 0:
+        lr_off = -lr_off
+    return pot_clamp(POT_NEUTRAL + fb_off), pot_clamp(POT_NEUTRAL - lr_off)
+
+
+def apply_speed_cap(byte: int, cap: int) -> int:
+    """Limit a host pot byte to ``|byte - 128| <= cap`` (cap above 125 means 125)
+    and into 8..253, as the chair does with the CONFIGURE caps."""
+    c = min(int(cap), POT_MAX_OFFSET)
+    off = min(max(int(byte) - POT_NEUTRAL, -c), c)
+    return pot_clamp(POT_NEUTRAL + off)
+
+
+def tick_delta(now: int, before: int) -> int:
+    """Signed difference of two wrapping 32-bit encoder counts (or chair
+    times), correct across a wrap: ``tick_delta(5, -2) == 7`` and
+    ``tick_delta(0, 2**32 - 1) == 1``."""
+    d = (int(now) - int(before)) & 0xFFFFFFFF
+    return d - (1 << 32) if d & 0x80000000 else d

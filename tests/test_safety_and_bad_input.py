@@ -23,9 +23,11 @@ def test_joystick_overrides_host_within_one_period():
     assert (frame.pot_fb, frame.pot_lr) == (253, 130)
     assert frame.flags & StatusFlags.JOYSTICK_OVERRIDE
     chair.release_joystick()
+    frame = chair.step()  # the old command does not come back by itself
+    assert frame.pot_fb == 128 and not frame.flags & StatusFlags.JOYSTICK_OVERRIDE
     chair.send(PotCommand(8, 128))
     frame = chair.step()
-    assert frame.pot_fb == 8 and not frame.flags & StatusFlags.JOYSTICK_OVERRIDE
+    assert frame.pot_fb == 8
 
 
 def test_stale_command_stops_the_chair_within_250_ms():

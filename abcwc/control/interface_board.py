@@ -8,6 +8,9 @@ asks, it keeps three rules (DESIGN.md section 6):
 2. pot outputs never leave the safe range 8..253 (and the host's speed cap);
 3. no valid command for 250 ms puts both pots at neutral.
 
+After the joystick has taken over, a joystick fault or a watchdog trip, the pots stay
+neutral until the host sends a new command: an old command never resumes by itself.
+
 :class:`InterfaceBoard` is the Python twin of ``firmware/core``; the simulator runs it
 so a simulated chair obeys the same rules as the real one.
 """
@@ -45,6 +48,7 @@ class InterfaceBoard:
         self.set_speed_cap(self.speed_cap)
         self._command: PotCommand | None = None
         self._command_time = float("-inf")
+        self._command_fresh = False  # False once overridden: wait for a new command
 
     def set_speed_cap(self, offset: int) -> None:
         """Limit host commands to ``128 +- offset`` on each channel (0..125)."""
@@ -61,6 +65,7 @@ class InterfaceBoard:
             raise TypeError(f"command must be a PotCommand or Twist, got {type(command).__name__}")
         self._command = command
         self._command_time = now
+        self._command_fresh = True
 
     @property
     def last_command(self) -> PotCommand | None:
@@ -77,14 +82,18 @@ class InterfaceBoard:
         neutral = PotCommand(p.pot_neutral, p.pot_neutral)
         readings = (joystick_fb, joystick_lr)
         if any(not JOYSTICK_PLAUSIBLE_MIN <= r <= JOYSTICK_PLAUSIBLE_MAX for r in readings):
+            self._command_fresh = False
             return BoardOutput(neutral, StatusFlags.JOYSTICK_FAULT)
         if any(not p.joystick_dead_band_low <= r <= p.joystick_dead_band_high for r in readings):
             fb, lr = (
                 joystick_to_pot_byte(min(max(r, p.joystick_min), p.joystick_max), p)
                 for r in readings
             )
+            self._command_fresh = False
             return BoardOutput(PotCommand(fb, lr), StatusFlags.JOYSTICK_OVERRIDE)
-        if self._command is None or now - self._command_time > p.watchdog_timeout + 1e-9:
+        stale = now - self._command_time > p.watchdog_timeout + 1e-9
+        if self._command is None or stale or not self._command_fresh:
+            self._command_fresh = False
             return BoardOutput(neutral, StatusFlags.WATCHDOG_TRIPPED)
         flags = StatusFlags.NONE
         bytes_out = []

@@ -1,0 +1,182 @@
+"""Checks for chapter 01, joystick to wheels (thesis 4.1.3-4.1.4, table 6, A.3).
+
+Exercises:
+
+* ``joystick_to_pot(value)``: eqn 1, ``(value - 100) * 0.85`` truncated to an integer;
+* ``table_6(direction)``: table 6 corrected, the full-deflection PotCommand for
+  forward, reverse, left, right and stop;
+* ``square_sequence(t)``: the open-loop square of appendix A.3 as a function of time:
+  forward 5 s, left 2 s, three times, then forward 2.5 s and stop.
+
+:func:`reference_square_sequence` is the answer the notebook falls back on; the pot
+functions fall back on :mod:`abcwc.control`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from abcwc.checks.report import checker, expect, expect_equal, format_value
+from abcwc.control import direction_pot_command, joystick_to_pot_byte
+from abcwc.params import default_params
+from abcwc.types import PotCommand
+
+__all__ = [
+    "FORWARD_FB",
+    "LEFT_LR",
+    "SQUARE_PHASES",
+    "THESIS_EQN1_VALUES",
+    "pot_mapping",
+    "reference_square_sequence",
+    "square_phase",
+    "square_sequence",
+    "table_6",
+]
+
+# Eqn 1's worked values: the joystick's ends and centre (4.1.3, 4.1.5).
+THESIS_EQN1_VALUES = ((398, 253), (254, 130), (110, 8))
+
+# Appendix A.3: (what, seconds), in order; after the last phase the chair stops.
+SQUARE_PHASES = (
+    ("forward", 5.0), ("left", 2.0),
+    ("forward", 5.0), ("left", 2.0),
+    ("forward", 5.0), ("left", 2.0),
+    ("forward", 2.5),
+)
+SQUARE_DURATION = sum(seconds for _, seconds in SQUARE_PHASES)  # 23.5 s
+
+# The reference answer's bytes: 0.515 m/s forward, 0.79 rad/s (45 deg/s) to the left.
+FORWARD_FB = 168
+LEFT_LR = 64
+
+
+def square_phase(t: float) -> str:
+    """Which phase of A.3 the time ``t`` (s since the start) falls in, or ``"stop"``."""
+    end = 0.0
+    for name, seconds in SQUARE_PHASES:
+        end += seconds
+        if 0.0 <= t < end:
+            return name
+    return "stop"
+
+
+def reference_square_sequence(t: float) -> PotCommand:
+    """A.3's square as pot bytes at time ``t`` (s): forward (168, 128), left (128, 64)."""
+    phase = square_phase(t)
+    if phase == "forward":
+        return PotCommand(FORWARD_FB, 128)
+    if phase == "left":
+        return PotCommand(128, LEFT_LR)
+    return PotCommand(128, 128)
+
+
+# --- checks ---------------------------------------------------------------------------
+
+
+@checker("pot mapping")
+def pot_mapping(fn: Callable[[int], int]) -> str:
+    """Check eqn 1 at the thesis's worked values, then over the joystick's whole range."""
+    for joystick, expected in THESIS_EQN1_VALUES:
+        got = fn(joystick)
+        _expect_int(got, joystick)
+        if joystick == 254 and got == 131:
+            expect(False, "joystick 254 gave 131, expected 130 (eqn 1: 154 * 0.85 = 130.9; "
+                          "the firmware stores it in a byte, which truncates, not rounds)")
+        expect_equal(got, expected, what=f"joystick {joystick}", ref="eqn 1")
+    p = default_params()
+    values = range(p.joystick_min, p.joystick_max + 1)
+    for joystick in values:
+        got = fn(joystick)
+        _expect_int(got, joystick)
+        expect_equal(got, joystick_to_pot_byte(joystick, p), what=f"joystick {joystick}",
+                     ref="eqn 1, truncated")
+    return (f"{len(THESIS_EQN1_VALUES)} thesis values and all {len(values)} joystick values "
+            f"{p.joystick_min}..{p.joystick_max} match")
+
+
+def _expect_int(got: object, joystick: int) -> None:
+    expect(isinstance(got, int | np.integer) and not isinstance(got, bool),
+           f"joystick {joystick} gave {format_value(got)} ({type(got).__name__}); a pot byte "
+           "is a whole number: truncate with int(...)")
+
+
+def _as_pair(command: object) -> tuple[int, int] | None:
+    if isinstance(command, PotCommand):
+        return command.fb, command.lr
+    return None
+
+
+@checker("table 6 corrected")
+def table_6(fn: Callable[[str], PotCommand]) -> str:
+    """Check the corrected table 6: full deflection per direction, as PotCommands."""
+    directions = ("forward", "reverse", "left", "right", "stop")
+    for direction in directions:
+        got = fn(direction)
+        pair = _as_pair(got)
+        expect(pair is not None, f"{direction} gave {format_value(got)}; return a "
+                                 "PotCommand(fb, lr)")
+        expected = direction_pot_command(direction)
+        other = {"left": "right", "right": "left"}.get(direction)
+        if other and pair == (expected.fb, direction_pot_command(other).lr):
+            expect(False, f"{direction} gave (fb {pair[0]}, lr {pair[1]}): that is table 6's "
+                          "left/right as printed; eqn 2, A.4 and A.14 turn left with LR "
+                          "below 128")
+        expect_equal(pair, (expected.fb, expected.lr), what=f"{direction} (fb, lr)",
+                     ref="eqn 1 of the joystick's ends")
+    return "forward, reverse, left, right and stop match"
+
+
+def _standing(byte: int) -> bool:
+    """True when the motor controller reads ``byte`` as neutral (its +-2 dead band)."""
+    p = default_params()
+    return abs(byte - p.pot_neutral) <= p.pot_dead_band
+
+
+@checker("square sequence")
+def square_sequence(fn: Callable[[float], PotCommand]) -> str:
+    """Check A.3's timing and directions at times inside every phase and after it.
+
+    The bytes are the student's choice: forward needs FB above the dead band (131..253)
+    with LR neutral; left needs LR below it (8..125) with FB neutral (128 +- 2); every
+    forward phase must send the same bytes, and so must every turn.
+    """
+    p = default_params()
+    seen: dict[str, tuple[int, int]] = {}
+    samples = 0
+    start = 0.0
+    for number, (phase, seconds) in enumerate(SQUARE_PHASES, start=1):
+        for t in (start + 0.01, start + seconds / 2, start + seconds - 0.01):
+            samples += 1
+            _check_sample(fn, t, phase, f"phase {number}: {phase} {seconds:g} s", seen, p)
+        start += seconds
+    for t in (SQUARE_DURATION + 0.01, SQUARE_DURATION + 1.0, 60.0):
+        samples += 1
+        _check_sample(fn, t, "stop", "after the square", seen, p)
+    fb, lr = seen["forward"][0], seen["left"][1]
+    return (f"{samples} sample times right: forward fb {fb}, left lr {lr}, "
+            f"stop after {SQUARE_DURATION:g} s")
+
+
+def _check_sample(fn: Callable[[float], PotCommand], t: float, phase: str, where: str,
+                  seen: dict[str, tuple[int, int]], p: object) -> None:
+    got = fn(t)
+    pair = _as_pair(got)
+    expect(pair is not None, f"t = {t:.2f} s gave {format_value(got)}; return a "
+                             "PotCommand(fb, lr)")
+    fb, lr = pair
+    said = f"t = {t:.2f} s ({where}) gave (fb {fb}, lr {lr})"
+    if phase == "forward":
+        expect(fb > 130 and _standing(lr),
+               f"{said}; forward needs fb above 130 (past the dead band) and lr 128")
+    elif phase == "left":
+        expect(lr < 126 and _standing(fb),
+               f"{said}; a left turn on the spot needs lr below 126 and fb 128 "
+               "(LR below 128 turns left, eqn 2)")
+    else:
+        expect(_standing(fb) and _standing(lr), f"{said}; the chair should stop: (128, 128)")
+    if phase in seen:
+        expect(seen[phase] == pair, f"{said}, but earlier {phase} sent (fb {seen[phase][0]}, "
+                                    f"lr {seen[phase][1]}); use the same bytes every time")
+    seen[phase] = pair

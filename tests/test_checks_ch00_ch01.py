@@ -1,0 +1,142 @@
+"""The exercise checks of chapters 00 (tour) and 01 (joystick to wheels).
+
+Each check must pass with the library's (or a correct) implementation and report
+"not yet", without raising, for a wrong answer and for an unwritten exercise.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from abcwc.checks import NOT_YET, PASS, ch00, ch01
+from abcwc.control import direction_pot_command, joystick_to_pot_byte
+from abcwc.types import PotCommand
+
+
+def not_written(*args, **kwargs):
+    # YOUR CODE HERE
+    raise NotImplementedError("exercise: replace these lines with your code")
+
+
+def run(check, fn, capsys):
+    """Run a check; return its result and the one line it printed."""
+    result = check(fn)
+    out = capsys.readouterr().out
+    assert out.count("\n") == 1, out
+    return result, out.strip()
+
+
+def assert_pass(check, fn, capsys) -> str:
+    result, line = run(check, fn, capsys)
+    assert result.passed, line
+    assert line.startswith(PASS)
+    return line
+
+
+def assert_not_yet(check, fn, capsys, *fragments: str) -> str:
+    result, line = run(check, fn, capsys)
+    assert not result.passed, line
+    assert line.startswith(NOT_YET)
+    for fragment in fragments:
+        assert fragment in line, line
+    return line
+
+
+# --- chapter 00 -----------------------------------------------------------------------
+
+
+def test_counts_per_wheel_turn(capsys):
+    line = assert_pass(ch00.counts_per_wheel_turn, ch00.reference_counts_per_wheel_turn, capsys)
+    assert "1258.06" in line
+    assert_pass(ch00.counts_per_wheel_turn, lambda dw, de, n: n * dw / de, capsys)
+    assert_not_yet(ch00.counts_per_wheel_turn, lambda dw, de, n: n * de / dw, capsys,
+                   "upside down")
+    assert_not_yet(ch00.counts_per_wheel_turn, lambda dw, de, n: 1258, capsys, "expected 1258.06")
+    assert_not_yet(ch00.counts_per_wheel_turn, not_written, capsys, "not written yet")
+
+
+def test_encoder_counts_to_distance(capsys):
+    assert_pass(ch00.encoder_counts_to_distance, ch00.reference_encoder_counts_to_distance,
+                capsys)
+    assert_pass(ch00.encoder_counts_to_distance,
+                lambda n, per_turn, d: np.asarray(n) * math.pi * d / per_turn, capsys)
+    assert_not_yet(ch00.encoder_counts_to_distance,
+                   lambda n, per_turn, d: n / per_turn * d, capsys, "one wheel turn")
+    assert_not_yet(ch00.encoder_counts_to_distance,
+                   lambda n, per_turn, d: abs(n) / per_turn * math.pi * d, capsys, "-629")
+    assert_not_yet(ch00.encoder_counts_to_distance, not_written, capsys, "not written yet")
+
+
+def test_distance_ahead(capsys):
+    assert_pass(ch00.distance_ahead, ch00.reference_distance_ahead, capsys)
+    assert_not_yet(ch00.distance_ahead, lambda frame, params: frame.sonar, capsys,
+                   "2.605", "3.005")
+    assert_not_yet(ch00.distance_ahead,
+                   lambda frame, params: frame.sonar + params.sonar.mount[0], capsys,
+                   "expected inf")
+    assert_not_yet(ch00.distance_ahead, not_written, capsys, "not written yet")
+
+
+# --- chapter 01 -----------------------------------------------------------------------
+
+
+def test_pot_mapping(capsys):
+    line = assert_pass(ch01.pot_mapping, joystick_to_pot_byte, capsys)
+    assert "289" in line
+    assert_pass(ch01.pot_mapping, lambda v: int((v - 100) * 0.85), capsys)
+    assert_not_yet(ch01.pot_mapping, lambda v: round((v - 100) * 0.85), capsys,
+                   "254 gave 131", "truncates")
+    assert_not_yet(ch01.pot_mapping, lambda v: (v - 100) * 0.85, capsys, "int(")
+    assert_not_yet(ch01.pot_mapping, lambda v: int((v - 100) * 0.85) if v < 300 else 0,
+                   capsys, "joystick 398")
+    assert_not_yet(ch01.pot_mapping, not_written, capsys, "not written yet")
+
+
+def test_table_6(capsys):
+    assert_pass(ch01.table_6, direction_pot_command, capsys)
+
+    def as_printed(direction):
+        table = {"left": PotCommand(128, 253), "right": PotCommand(128, 8)}
+        return table.get(direction) or direction_pot_command(direction)
+
+    assert_not_yet(ch01.table_6, as_printed, capsys, "left/right as printed")
+    assert_not_yet(ch01.table_6, lambda d: (253, 128), capsys, "PotCommand")
+    assert_not_yet(ch01.table_6, lambda d: PotCommand(128, 128), capsys, "forward")
+    assert_not_yet(ch01.table_6, not_written, capsys, "not written yet")
+
+
+def test_square_sequence(capsys):
+    line = assert_pass(ch01.square_sequence, ch01.reference_square_sequence, capsys)
+    assert "fb 168" in line and "lr 64" in line
+
+    def other_bytes(t):  # a faster square is fine
+        phase = ch01.square_phase(t)
+        return {"forward": PotCommand(200, 128), "left": PotCommand(128, 40)}.get(
+            phase, PotCommand(128, 128))
+
+    assert_pass(ch01.square_sequence, other_bytes, capsys)
+
+    def turns_right(t):
+        if ch01.square_phase(t) == "left":
+            return PotCommand(128, 192)
+        return ch01.reference_square_sequence(t)
+
+    assert_not_yet(ch01.square_sequence, turns_right, capsys, "lr below 126")
+    assert_not_yet(ch01.square_sequence, lambda t: ch01.reference_square_sequence(t - 0.5),
+                   capsys, "t = 0.01 s")
+    assert_not_yet(ch01.square_sequence, lambda t: ch01.reference_square_sequence(t % 23.5),
+                   capsys, "should stop")
+    assert_not_yet(ch01.square_sequence, lambda t: (168, 128), capsys, "PotCommand")
+    assert_not_yet(ch01.square_sequence, not_written, capsys, "not written yet")
+
+
+@pytest.mark.parametrize(
+    ("t", "phase"),
+    [(0.0, "forward"), (4.99, "forward"), (5.0, "left"), (6.99, "left"), (7.0, "forward"),
+     (21.0, "forward"), (23.49, "forward"), (23.5, "stop"), (-1.0, "stop"), (99.0, "stop")],
+)
+def test_square_phase(t, phase):
+    assert ch01.square_phase(t) == phase

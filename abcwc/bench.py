@@ -50,6 +50,13 @@ def bench_sim() -> dict[str, float]:
     }
 
 
+@benchmark("ekf", "EKF predict+update cycles per second (NumPy and filterpy back ends)")
+def bench_ekf() -> dict[str, float]:
+    from abcwc.estimation.bench import bench_ekf as measure
+
+    return measure()
+
+
 _NOTEBOOK_RUNNER = """
 import resource, sys, time
 import nbformat

@@ -1,0 +1,290 @@
+"""Wheel odometry: encoder counts -> wheel travel -> pose (thesis 4.2.1, eqns 6-10).
+
+Each wheel's travel over a period is its count increment times the distance per count,
+``pi d_e / N_e`` (62 mm encoder wheel, 400 counts per turn: 0.487 mm), times an
+optional per-wheel correction factor from UMBmark (:mod:`abcwc.estimation.umbmark`).
+Then, with wheel base ``b``::
+
+    d_c = (d_r + d_l) / 2                      (eqn 6)
+    phi = (d_r - d_l) / b                      (eqn 7)
+    theta' = theta + phi                       (eqn 8)
+    x' = x + d_c cos(theta_used)               (eqn 9)
+    y' = y + d_c sin(theta_used)               (eqn 10)
+
+Three choices of ``theta_used`` (the ``method`` argument):
+
+* ``"euler"``: the old heading ``theta``, as eqns 9-10 are written. Each step's chord
+  is pointed along the heading at the start of the step, so on a curve every step
+  errs by ``d_c phi / 2`` sideways, always to the same side: a first-order error that
+  makes the estimated path spiral off on long curves and grows with the period.
+* ``"midpoint"`` (second-order Runge-Kutta): ``theta + phi / 2``. The chord of a
+  circular arc points exactly along the mean heading, so the direction error is gone;
+  what remains is the length: the chord is shorter than the arc by a factor
+  ``sin(phi/2) / (phi/2)``, an error of order ``d_c phi^2 / 24`` per step.
+* ``"exact"``: the heading ``theta + phi / 2`` and the chord length
+  ``d_c sin(phi/2) / (phi/2)``. Exact when the wheels turn at constant speeds over the
+  step (the chair drives a circular arc); no integration error is left, only the
+  sensors' own (count quantisation, slip, wrong wheel sizes or wheel base).
+
+The same maths runs on a whole log at once (:func:`integrate_odometry`,
+:func:`odometry_from_log`: ``np.cumsum`` of per-step increments) and step by step
+(:class:`Odometry`, what a controller calls every period).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+
+from abcwc.log import RunLog
+from abcwc.params import ChairParams, default_params
+from abcwc.types import Pose2D, SensorFrame, wrap_angle
+
+Method = Literal["euler", "midpoint", "exact"]
+METHODS: tuple[str, ...] = ("euler", "midpoint", "exact")
+
+
+def _check_method(method: str) -> None:
+    if method not in METHODS:
+        raise ValueError(f"odometry method {method!r} unknown; allowed: {', '.join(METHODS)}")
+
+
+def wrap_tick_delta(delta: int | np.ndarray, bits: int = 32) -> int | np.ndarray:
+    """Difference of two cumulative counts, corrected for wrap-around at ``bits`` width.
+
+    The firmware keeps counts in a signed ``bits``-bit integer, which wraps from
+    ``2**(bits-1) - 1`` to ``-2**(bits-1)``. Any true increment smaller than half the
+    range in magnitude comes back right: the difference is taken modulo ``2**bits``
+    into ``[-2**(bits-1), 2**(bits-1))``.
+    """
+    if not isinstance(bits, int) or not 2 <= bits <= 64:
+        raise ValueError(f"bits must be an integer 2..64, got {bits!r}")
+    span = 1 << bits
+    half = 1 << (bits - 1)
+    if isinstance(delta, np.ndarray):
+        d = delta.astype(object) if bits == 64 else delta.astype(np.int64)
+        return ((d + half) % span - half).astype(np.int64)
+    return (int(delta) + half) % span - half
+
+
+def encoder_ticks_to_wheel_distance(
+    ticks: int | float | np.ndarray,
+    params: ChairParams | None = None,
+    correction: float | tuple[float, float] = 1.0,
+) -> float | np.ndarray:
+    """Wheel travel (m) from encoder count increments: ``ticks * pi d_e / N_e * c``.
+
+    ``ticks`` is a count (or an array of counts; an ``(..., 2)`` array is read as
+    left, right columns). ``correction`` is one factor for both wheels or a
+    ``(c_left, c_right)`` pair from UMBmark, applied to the last axis.
+    """
+    p = params or default_params()
+    per_count = p.distance_per_count
+    if isinstance(correction, tuple):
+        if len(correction) != 2:
+            raise ValueError(f"correction must be a number or (c_left, c_right), "
+                             f"got {correction!r}")
+        factors = np.asarray(correction, dtype=float)
+        arr = np.asarray(ticks, dtype=float)
+        if arr.ndim == 0 or arr.shape[-1] != 2:
+            raise ValueError("a (c_left, c_right) correction needs ticks shaped (..., 2), "
+                             f"got shape {arr.shape}")
+        return arr * per_count * factors
+    if isinstance(ticks, np.ndarray):
+        return ticks.astype(float) * per_count * float(correction)
+    return float(ticks) * per_count * float(correction)
+
+
+def pose_increments(
+    d_left: np.ndarray, d_right: np.ndarray, wheel_base: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per-step centre travel ``d_c`` (m, eqn 6) and heading change ``phi`` (rad, eqn 7)."""
+    if not wheel_base > 0:
+        raise ValueError(f"wheel_base must be > 0 m, got {wheel_base!r}")
+    d_left = np.asarray(d_left, dtype=float)
+    d_right = np.asarray(d_right, dtype=float)
+    return (d_right + d_left) / 2.0, (d_right - d_left) / wheel_base
+
+
+def _chord(d_c: np.ndarray, phi: np.ndarray, theta_old: np.ndarray,
+           method: str) -> tuple[np.ndarray, np.ndarray]:
+    """The step's displacement (dx, dy) in the world frame for each method."""
+    if method == "euler":
+        heading, length = theta_old, d_c
+    else:
+        heading = theta_old + phi / 2.0
+        length = d_c * np.sinc(phi / (2.0 * np.pi)) if method == "exact" else d_c
+    return length * np.cos(heading), length * np.sin(heading)
+
+
+def integrate_odometry(
+    d_left: np.ndarray,
+    d_right: np.ndarray,
+    wheel_base: float,
+    start: Pose2D | None = None,
+    method: Method = "euler",
+) -> np.ndarray:
+    """Poses after each step from per-step wheel travels (m), vectorised.
+
+    Returns an ``(N + 1, 3)`` array ``[x, y, theta]``: row 0 is ``start`` and row
+    ``k`` the pose after step ``k``. Heading is wrapped to (-pi, pi].
+    """
+    _check_method(method)
+    start = start or Pose2D()
+    d_c, phi = pose_increments(d_left, d_right, wheel_base)
+    theta = start.theta + np.concatenate([[0.0], np.cumsum(phi)])
+    dx, dy = _chord(d_c, phi, theta[:-1], method)
+    out = np.empty((len(d_c) + 1, 3))
+    out[:, 0] = start.x + np.concatenate([[0.0], np.cumsum(dx)])
+    out[:, 1] = start.y + np.concatenate([[0.0], np.cumsum(dy)])
+    out[:, 2] = np.angle(np.exp(1j * theta))
+    return out
+
+
+def validate_log(log: RunLog, need_gyro: bool = False) -> None:
+    """Refuse a log that odometry cannot integrate, saying what is wrong and where.
+
+    Timestamps must be finite and strictly increasing; ticks an ``(N, 2)`` array of
+    finite counts; with ``need_gyro`` every gyro sample must be finite.
+    """
+    t = np.asarray(log.t, dtype=float)
+    if t.ndim != 1 or len(t) < 1:
+        raise ValueError(f"log.t must be a non-empty 1-D array, got shape {t.shape}")
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        raise ValueError(f"log.t has a missing (NaN/inf) timestamp at index {bad[0]}; "
+                         "timestamps must be finite")
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if bad.size:
+        k = int(bad[0])
+        raise ValueError(f"log.t is not strictly increasing at index {k + 1} "
+                         f"({t[k]:.6g} s then {t[k + 1]:.6g} s)")
+    ticks = np.asarray(log.ticks)
+    if ticks.shape != (len(t), 2):
+        raise ValueError(f"log.ticks must have shape ({len(t)}, 2), got {ticks.shape}")
+    if ticks.dtype.kind == "f":
+        bad = np.flatnonzero(~np.isfinite(ticks).all(axis=1))
+        if bad.size:
+            raise ValueError(f"log.ticks has a missing (NaN) count at index {bad[0]}")
+    if need_gyro:
+        gyro = np.asarray(log.gyro_z, dtype=float)
+        if gyro.shape != t.shape:
+            raise ValueError(f"log.gyro_z must have shape {t.shape}, got {gyro.shape}")
+        bad = np.flatnonzero(~np.isfinite(gyro))
+        if bad.size:
+            raise ValueError(f"log.gyro_z has a missing (NaN) sample at index {bad[0]}; "
+                             "drop or interpolate it before integrating")
+
+
+def log_wheel_travel(
+    log: RunLog,
+    params: ChairParams | None = None,
+    correction: tuple[float, float] = (1.0, 1.0),
+    bits: int = 32,
+) -> np.ndarray:
+    """Per-step wheel travel (m), ``(N - 1, 2)`` left/right, from a log's counts."""
+    validate_log(log)
+    deltas = wrap_tick_delta(np.diff(np.asarray(log.ticks).astype(np.int64), axis=0), bits)
+    return encoder_ticks_to_wheel_distance(deltas, params, correction)
+
+
+def _log_start(log: RunLog, start: Pose2D | None) -> Pose2D:
+    if start is not None:
+        return start
+    first = np.asarray(log.pose[0], dtype=float) if len(log.pose) else np.full(3, np.nan)
+    return Pose2D(*map(float, first)) if np.isfinite(first).all() else Pose2D()
+
+
+def odometry_from_log(
+    log: RunLog,
+    params: ChairParams | None = None,
+    method: Method = "euler",
+    correction: tuple[float, float] = (1.0, 1.0),
+    wheel_base: float | None = None,
+    start: Pose2D | None = None,
+    bits: int = 32,
+) -> np.ndarray:
+    """Odometric pose at every row of a log, ``(N, 3)``, aligned with ``log.pose``.
+
+    Row ``k``'s counts hold the travel over the period ending at ``log.t[k]``, so the
+    step from row ``k - 1`` to ``k`` uses their difference. Starts at ``start``, or
+    at the log's first ground-truth pose when it has one, else at the origin.
+    ``wheel_base`` defaults to the nominal one (UMBmark's ``b_actual`` goes here).
+    """
+    p = params or default_params()
+    travel = log_wheel_travel(log, p, correction, bits)
+    base = p.wheel_base if wheel_base is None else wheel_base
+    return integrate_odometry(travel[:, 0], travel[:, 1], base, _log_start(log, start), method)
+
+
+class Odometry:
+    """Step-by-step wheel odometry, for controllers that run every period.
+
+    The first :meth:`update` only records the counts (the reference); each later
+    one integrates the increment since the previous call. Counts may wrap at
+    ``bits`` width.
+    """
+
+    def __init__(
+        self,
+        params: ChairParams | None = None,
+        method: Method = "euler",
+        correction: tuple[float, float] = (1.0, 1.0),
+        wheel_base: float | None = None,
+        start: Pose2D | None = None,
+        bits: int = 32,
+    ):
+        _check_method(method)
+        self.params = p = params or default_params()
+        self.method = method
+        self.correction = (float(correction[0]), float(correction[1]))
+        self.wheel_base = p.wheel_base if wheel_base is None else float(wheel_base)
+        if not self.wheel_base > 0:
+            raise ValueError(f"wheel_base must be > 0 m, got {wheel_base!r}")
+        self.bits = bits
+        self.pose = start or Pose2D()
+        self.distance = 0.0  # m, total centre travel (signed)
+        self.last_step = (0.0, 0.0)  # (d_c m, phi rad) of the latest update
+        self._last: tuple[int, int] | None = None
+
+    def reset(self, pose: Pose2D | None = None) -> None:
+        """Restart from ``pose`` (default the origin) at the next counts seen."""
+        self.pose = pose or Pose2D()
+        self.distance = 0.0
+        self.last_step = (0.0, 0.0)
+        self._last = None
+
+    def update(self, ticks_left: int, ticks_right: int) -> Pose2D:
+        """Feed the cumulative counts; return the new pose estimate."""
+        counts = (int(ticks_left), int(ticks_right))
+        if self._last is None:
+            self._last = counts
+            return self.pose
+        dl = wrap_tick_delta(counts[0] - self._last[0], self.bits)
+        dr = wrap_tick_delta(counts[1] - self._last[1], self.bits)
+        self._last = counts
+        per_count = self.params.distance_per_count
+        d_left = dl * per_count * self.correction[0]
+        d_right = dr * per_count * self.correction[1]
+        d_c = (d_right + d_left) / 2.0
+        phi = (d_right - d_left) / self.wheel_base
+        theta = self.pose.theta
+        if self.method == "euler":
+            heading, length = theta, d_c
+        else:
+            heading = theta + phi / 2.0
+            half = phi / 2.0
+            exact = self.method == "exact" and half != 0.0
+            length = d_c * math.sin(half) / half if exact else d_c
+        self.pose = Pose2D(self.pose.x + length * math.cos(heading),
+                           self.pose.y + length * math.sin(heading), wrap_angle(theta + phi))
+        self.distance += d_c
+        self.last_step = (d_c, phi)
+        return self.pose
+
+    def update_frame(self, frame: SensorFrame) -> Pose2D:
+        """:meth:`update` from a SensorFrame's counts."""
+        return self.update(frame.ticks_left, frame.ticks_right)

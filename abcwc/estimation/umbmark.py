@@ -1,0 +1,349 @@
+"""UMBmark: measure and correct systematic odometry errors (thesis 4.2.3, 4.3.6, A.16).
+
+Borenstein and Feng, "Measurement and correction of systematic odometry errors in
+mobile robots", IEEE Trans. Robotics and Automation 12(6), 1996. The chair drives an
+``L x L`` square clockwise and counter-clockwise by its own odometry, several times
+each way; each run's *return error* is where it really ends minus where its odometry
+says it ends. Two systematic errors dominate:
+
+* type A, a wrong wheel base ``E_b = b_actual / b_nominal``: every 90 degree turn
+  comes out as ``90 deg - alpha`` (too short if ``E_b > 1``), in both directions;
+* type B, unequal wheels ``E_d = D_R / D_L``: every "straight" leg is really an arc
+  that turns the chair by ``beta`` (to the left if ``E_d > 1``), in both directions.
+
+Small-angle model of the return errors (derived in our REP 103 frame: start at the
+origin facing +x, y to the left; see :func:`model_return_error`)::
+
+    x_cw  = -2L (alpha + beta)      y_cw  = -2L (alpha + beta)
+    x_ccw = -2L (alpha - beta)      y_ccw = +2L (alpha - beta)
+
+so from the centres of gravity of each direction's errors (all angles in radians)::
+
+    alpha = (x_cw + x_ccw) / (-4 L)            beta = (x_cw - x_ccw) / (-4 L)
+    R = (L / 2) / sin(beta / 2)                (radius of the "straight" legs)
+    E_d = (R + b / 2) / (R - b / 2)
+    E_b = (pi/2) / (pi/2 - alpha),   b_actual = E_b b_nominal
+    c_l = 2 / (E_d + 1),             c_r = 2 / (1 / E_d + 1)
+
+and ``E_max,syst = max(|cg_cw|, |cg_ccw|)``. ``c_l`` and ``c_r`` multiply each wheel's
+distance per count: they fix the ratio of the two wheels and keep their mean. The
+paper's x formulas come out with the same signs in our frame; its y formulas are the
+sign pattern above (``alpha = (y_cw - y_ccw)/(-4L)``, ``beta = (y_cw + y_ccw)/(-4L)``).
+
+Where the thesis's A.16 script goes wrong (:func:`thesis_a16_outputs` runs it as printed):
+
+1. it turns alpha and beta into degrees (``* 180/pi``) and then takes ``sin(beta/2)``
+   with MATLAB's radian ``sin``, and multiplies R by ``180/3.14`` afterwards: R is
+   neither metres nor consistent;
+2. ``E_d = (R + beta/2) / (R - beta/2)`` puts the angle ``beta`` where the wheel base
+   ``b`` belongs, so E_d is not a wheel-diameter ratio at all;
+3. ``E_b = 90 / (90 - alpha)`` is right (alpha in degrees there);
+4. its offsets are all positive: they look like unsigned distances, but the method
+   needs signed errors in one frame (the sign tells type A from type B), so the
+   centres of gravity it takes are not the paper's;
+5. ``x = [x_CW x_CCW]`` names variables that do not exist (MATLAB is case-sensitive),
+   and ``theta`` has nine values where the table (figure 51) has ten, with the third
+   and fourth swapped; the printed 0.0042 comes from those nine values.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from abcwc.estimation.odometry import Odometry
+from abcwc.paths import data_dir
+from abcwc.types import Pose2D, SensorFrame, Twist, wrap_angle
+
+THESIS_SIDE = 3.5  # m, the thesis's square (A.16: L = 3.5)
+
+
+@dataclass(frozen=True)
+class UmbmarkResult:
+    """What UMBmark measures and the corrections it gives (m, rad, ratios)."""
+
+    side: float
+    cg_cw: tuple[float, float]  # centre of gravity of the CW return errors (m)
+    cg_ccw: tuple[float, float]
+    e_max_syst: float  # m
+    alpha: float  # rad, type A turn error per 90 degree turn
+    beta: float  # rad, type B heading change per straight leg
+    radius: float  # m, radius of the curved "straight" legs (inf when beta = 0)
+    e_d: float  # D_R / D_L
+    e_b: float  # b_actual / b_nominal
+    wheel_base: float  # m, b_actual
+    c_left: float
+    c_right: float
+
+    @property
+    def correction(self) -> tuple[float, float]:
+        """``(c_left, c_right)`` for :class:`abcwc.estimation.Odometry`."""
+        return (self.c_left, self.c_right)
+
+
+def e_max_syst(cw_errors: np.ndarray, ccw_errors: np.ndarray) -> float:
+    """``max(|cg_cw|, |cg_ccw|)`` (m): the larger distance of the two centres of gravity."""
+    cw = _errors(cw_errors, "cw_errors")[:, :2].mean(axis=0)
+    ccw = _errors(ccw_errors, "ccw_errors")[:, :2].mean(axis=0)
+    return float(max(np.hypot(*cw), np.hypot(*ccw)))
+
+
+def _errors(errors: np.ndarray, name: str) -> np.ndarray:
+    arr = np.atleast_2d(np.asarray(errors, dtype=float))
+    if arr.ndim != 2 or arr.shape[1] not in (2, 3) or len(arr) == 0:
+        raise ValueError(f"{name} must be (n, 2) or (n, 3) return errors (x, y[, theta]), "
+                         f"got shape {np.shape(errors)}")
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} has non-finite values")
+    return arr
+
+
+def umbmark_corrections(
+    cw_errors: np.ndarray, ccw_errors: np.ndarray, side: float, wheel_base: float,
+    use: str = "xy",
+) -> UmbmarkResult:
+    """Borenstein and Feng's corrections from the CW and CCW return errors.
+
+    ``*_errors`` are ``(n, 2)`` or ``(n, 3)`` arrays of return errors (actual minus
+    odometric end, metres, in the start frame: x forward, y left); ``side`` is L (m)
+    and ``wheel_base`` the nominal b (m) the odometry used.
+
+    ``use`` picks the formulas: ``"x"`` the paper's (from the x errors), ``"y"`` its
+    alternative from the y errors, ``"xy"`` (default) their mean. The two sets err
+    in opposite directions at second order: the heading error piles up to about
+    ``4 (alpha + beta)`` over a square and turns the error vector, moving x and y
+    errors against each other. With 3 % and 1 % errors on a 3.5 m square each set
+    alone misses alpha by ~30 %, their mean by ~5 %.
+    """
+    if not side > 0 or not wheel_base > 0:
+        raise ValueError(f"side and wheel_base must be > 0 m, got {side!r}, {wheel_base!r}")
+    cw = _errors(cw_errors, "cw_errors")[:, :2].mean(axis=0)
+    ccw = _errors(ccw_errors, "ccw_errors")[:, :2].mean(axis=0)
+    alpha_x, beta_x = (cw[0] + ccw[0]) / (-4.0 * side), (cw[0] - ccw[0]) / (-4.0 * side)
+    alpha_y, beta_y = (cw[1] - ccw[1]) / (-4.0 * side), (cw[1] + ccw[1]) / (-4.0 * side)
+    if use == "x":
+        alpha, beta = alpha_x, beta_x
+    elif use == "y":
+        alpha, beta = alpha_y, beta_y
+    elif use == "xy":
+        alpha, beta = (alpha_x + alpha_y) / 2, (beta_x + beta_y) / 2
+    else:
+        raise ValueError(f"use must be 'x', 'y' or 'xy', got {use!r}")
+    e_b = (math.pi / 2) / (math.pi / 2 - alpha)
+    b_actual = e_b * wheel_base
+    if beta == 0.0:
+        radius, e_d = math.inf, 1.0
+    else:
+        radius = (side / 2) / math.sin(beta / 2)
+        if abs(radius) <= b_actual / 2:
+            raise ValueError(f"beta {beta:.3g} rad is too large for the small-error model")
+        e_d = (radius + b_actual / 2) / (radius - b_actual / 2)
+    return UmbmarkResult(
+        side=side, cg_cw=(float(cw[0]), float(cw[1])), cg_ccw=(float(ccw[0]), float(ccw[1])),
+        e_max_syst=float(max(np.hypot(*cw), np.hypot(*ccw))), alpha=float(alpha),
+        beta=float(beta), radius=float(radius), e_d=float(e_d), e_b=float(e_b),
+        wheel_base=float(b_actual), c_left=float(2.0 / (e_d + 1.0)),
+        c_right=float(2.0 / (1.0 / e_d + 1.0)),
+    )
+
+
+def model_return_error(side: float, wheel_base: float, e_d: float, e_b: float,
+                       direction: str) -> tuple[float, float]:
+    """Return error (x, y) (m) of one square by the small-angle model above.
+
+    ``alpha = pi/2 (1 - 1/E_b)``; ``beta = 2 asin(L / 2R)`` with the R for which
+    ``(R + b/2)/(R - b/2) = E_d`` (b the actual wheel base, ``E_b b``).
+    """
+    alpha = math.pi / 2 * (1.0 - 1.0 / e_b)
+    if e_d == 1.0:
+        beta = 0.0
+    else:
+        radius = e_b * wheel_base / 2 * (e_d + 1) / (e_d - 1)
+        beta = 2 * math.asin(side / (2 * radius))
+    if direction == "cw":
+        return -2 * side * (alpha + beta), -2 * side * (alpha + beta)
+    if direction == "ccw":
+        return -2 * side * (alpha - beta), 2 * side * (alpha - beta)
+    raise ValueError(f"direction must be 'cw' or 'ccw', got {direction!r}")
+
+
+# --------------------------------------------------------------------- driving
+class SquareDriver:
+    """Controller: drive one L x L square by odometry, then turn back to the start heading.
+
+    Each leg: steer at the corner (proportional in heading), slow down in proportion
+    to the distance left, stop on it; wait until the wheels stand still; turn on the
+    spot to the next heading (proportional, 0.1 degree tolerance); wait again. Call it
+    with every SensorFrame (``SimBase.run``); :attr:`done` is set at the end.
+    """
+
+    def __init__(self, odometry: Odometry, side: float = THESIS_SIDE, direction: str = "ccw",
+                 speed: float = 0.5, turn_rate: float = 0.5, settle: float = 0.6):
+        if direction not in ("cw", "ccw"):
+            raise ValueError(f"direction must be 'cw' or 'ccw', got {direction!r}")
+        self.odometry = odometry
+        self.side, self.speed, self.turn_rate, self.settle = side, speed, turn_rate, settle
+        self.sign = 1.0 if direction == "ccw" else -1.0
+        self.start: Pose2D | None = None
+        self.leg = 0
+        self.phase = "drive"
+        self.done = False
+        self._wait_until = 0.0
+
+    def _corner(self, i: int) -> tuple[float, float, float]:
+        """Corner i (1..4) in the odometry frame and the leg's heading."""
+        s = self.start
+        assert s is not None
+        pts = [(0, 0), (1, 0), (1, self.sign), (0, self.sign), (0, 0)]
+        px, py = pts[i]
+        c, sn = math.cos(s.theta), math.sin(s.theta)
+        x = s.x + self.side * (c * px - sn * py)
+        y = s.y + self.side * (sn * px + c * py)
+        return x, y, wrap_angle(s.theta + self.sign * (i - 1) * math.pi / 2)
+
+    def __call__(self, frame: SensorFrame) -> Twist:
+        pose = self.odometry.update_frame(frame)
+        if self.start is None:
+            self.start = pose
+        if self.done or frame.t < self._wait_until:
+            return Twist(0.0, 0.0)
+        if self.phase == "drive":
+            gx, gy, leg_heading = self._corner(self.leg + 1)
+            along = (gx - pose.x) * math.cos(leg_heading) + (gy - pose.y) * math.sin(leg_heading)
+            if along <= 0.002:
+                self.phase, self._wait_until = "turn", frame.t + self.settle
+                return Twist(0.0, 0.0)
+            bearing = math.atan2(gy - pose.y, gx - pose.x) if along > 0.3 else leg_heading
+            w = _clip(2.0 * wrap_angle(bearing - pose.theta), self.turn_rate)
+            return Twist(min(self.speed, max(0.03, 0.8 * along)), w)
+        target = self._corner(self.leg + 2)[2] if self.leg < 3 else self.start.theta
+        error = wrap_angle(target - pose.theta)
+        if abs(error) <= 0.0017:
+            self.leg += 1
+            self.phase, self._wait_until = "drive", frame.t + self.settle
+            self.done = self.leg == 4
+            return Twist(0.0, 0.0)
+        rate = math.copysign(max(0.02, min(self.turn_rate, 1.5 * abs(error))), error)
+        return Twist(0.0, rate)
+
+
+def _clip(value: float, limit: float) -> float:
+    return max(-limit, min(limit, value))
+
+
+def return_error(start: Pose2D, true_end: Pose2D, odometric_end: Pose2D) -> np.ndarray:
+    """``true - odometric`` end pose in the start frame: ``[x, y, theta]`` (m, m, rad)."""
+    c, s = math.cos(start.theta), math.sin(start.theta)
+    dx, dy = true_end.x - odometric_end.x, true_end.y - odometric_end.y
+    return np.array([c * dx + s * dy, -s * dx + c * dy,
+                     wrap_angle(true_end.theta - odometric_end.theta)])
+
+
+def drive_square(sim, direction: str, side: float = THESIS_SIDE,
+                 correction: tuple[float, float] = (1.0, 1.0),
+                 wheel_base: float | None = None, speed: float = 0.5,
+                 timeout: float = 200.0) -> np.ndarray:
+    """Drive one UMBmark square on ``sim`` (a SimBase) by its odometry; return its error.
+
+    The odometry starts at the true pose, so the return error ``true - odometric``
+    (start frame) is what the odometry got wrong; the controller's own stopping
+    error cancels out.
+    """
+    start = sim.pose
+    odometry = Odometry(sim.params, correction=correction, wheel_base=wheel_base, start=start)
+    driver = SquareDriver(odometry, side, direction, speed)
+    elapsed = 0.0
+    while not driver.done:
+        if elapsed > timeout:
+            raise RuntimeError(f"{direction} square not finished in {timeout} s")
+        sim.run(driver, 5.0)
+        elapsed += 5.0
+    sim.run(driver, 1.0)  # done: it sends zero; let the wheels stop before measuring
+    odometry.update_frame(sim.frame)
+    return return_error(start, sim.pose, odometry.pose)
+
+
+def run_umbmark(make_sim: Callable[[int], object], runs: int = 5, side: float = THESIS_SIDE,
+                correction: tuple[float, float] = (1.0, 1.0),
+                wheel_base: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``runs`` CW and ``runs`` CCW squares, each on a fresh ``make_sim(seed)``.
+
+    Returns the ``(runs, 3)`` CW and CCW return errors.
+    """
+    out = {}
+    for k, direction in enumerate(("cw", "ccw")):
+        out[direction] = np.array([
+            drive_square(make_sim(2 * i + k), direction, side, correction, wheel_base)
+            for i in range(runs)])
+    return out["cw"], out["ccw"]
+
+
+# --------------------------------------------------------------------- the thesis's trials
+def load_thesis_trials(path: str | Path | None = None) -> dict[str, np.ndarray]:
+    """The ten end positions of figure 51: ``{"cw": (5, 3), "ccw": (5, 3)}`` (m, m, rad)."""
+    path = Path(path) if path is not None else data_dir() / "umbmark_thesis_trials.csv"
+    rows: dict[str, list[list[float]]] = {"cw": [], "ccw": []}
+    with open(path, newline="") as handle:
+        for row in csv.DictReader(row for row in handle if not row.startswith("#")):
+            rows[row["direction"].lower()].append(
+                [float(row["x"]), float(row["y"]), float(row["theta"])])
+    return {k: np.array(v) for k, v in rows.items()}
+
+
+def trial_covariance(ends: np.ndarray, ddof: int = 1) -> np.ndarray:
+    """Covariance (3 x 3) of ``(n, 3)`` end poses; ``ddof=1`` is MATLAB's ``cov``."""
+    ends = np.asarray(ends, dtype=float)
+    if ends.ndim != 2 or ends.shape[1] != 3 or len(ends) <= ddof:
+        raise ValueError(f"ends must be (n, 3) with n > ddof, got shape {ends.shape}")
+    return np.cov(ends, rowvar=False, ddof=ddof)
+
+
+def thesis_a16_outputs(trials: dict[str, np.ndarray] | None = None) -> dict[str, float]:
+    """What A.16 computes, run as printed (degree/radian mix and all), for comparison.
+
+    Its ``theta`` vector is the listing's nine values, not the table's ten.
+    """
+    trials = trials or load_thesis_trials()
+    cw, ccw = trials["cw"], trials["ccw"]
+    side = THESIS_SIDE
+    x_cw, y_cw, x_ccw, y_ccw = cw[:, 0].mean(), cw[:, 1].mean(), ccw[:, 0].mean(), ccw[:, 1].mean()
+    alpha_deg = (x_cw + x_ccw) / (-4 * side) * 180 / math.pi
+    beta_deg = (x_cw - x_ccw) / (-4 * side) * 180 / math.pi
+    radius = (side / 2) / math.sin(beta_deg / 2) * 180 / 3.14
+    e_d = (radius + beta_deg / 2) / (radius - beta_deg / 2)
+    theta9 = np.array([0.15, 0.13, 0.09, 0.01, 0.03, 0.12, 0.16, 0.21, 0.16])
+    x = np.concatenate([cw[:, 0], ccw[:, 0]])
+    y = np.concatenate([cw[:, 1], ccw[:, 1]])
+    return {
+        "emax": float(max(math.hypot(x_cw, y_cw), math.hypot(x_ccw, y_ccw))),
+        "alpha_deg": alpha_deg, "beta_deg": beta_deg, "R": radius, "E_d": e_d,
+        "E_b": 90 / (90 - alpha_deg), "c_l": 2 / (e_d + 1), "c_r": 2 / (1 / e_d + 1),
+        "cov_x": float(np.var(x, ddof=1)), "cov_y": float(np.var(y, ddof=1)),
+        "cov_theta": float(np.var(theta9, ddof=1)),
+    }
+
+
+def calibrate_distance_scale(sim, seconds: float = 10.0, speed: float = 0.5,
+                             correction: tuple[float, float] = (1.0, 1.0)) -> float:
+    """True / odometric distance of a straight drive: the scale UMBmark cannot see.
+
+    UMBmark fixes the ratio of the wheels and the wheel base but keeps their mean
+    size; the mean comes from driving a measured distance (the thesis's firmware
+    carries such a calibration: 1242.7 counts per wheel turn, not the nominal 1258).
+    Multiply both correction factors by the result.
+    """
+    start = sim.pose
+    odometry = Odometry(sim.params, correction=correction, start=start)
+    odometry.update_frame(sim.frame)
+    t0 = sim.t
+    sim.run(lambda frame: Twist(speed, 0.0) if frame.t - t0 < seconds else Twist(), seconds + 1)
+    odometry.update_frame(sim.frame)
+    true = math.hypot(sim.pose.x - start.x, sim.pose.y - start.y)
+    if odometry.distance <= 0:
+        raise RuntimeError("the chair did not move forward; cannot calibrate the scale")
+    return true / odometry.distance

@@ -1,0 +1,120 @@
+"""Wheel odometry (thesis 4.2.1, eqns 6-10): units, integration methods, wrap, validation."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from abcwc.estimation import (
+    Odometry,
+    encoder_ticks_to_wheel_distance,
+    integrate_odometry,
+    odometry_from_log,
+    validate_log,
+    wrap_tick_delta,
+)
+from abcwc.estimation.gyro import gyro_odometry_from_log
+from abcwc.params import default_params
+from abcwc.sim.base import SimBase
+from abcwc.sim.world import world_from_dict
+from abcwc.types import Pose2D, Twist
+
+OPEN = world_from_dict({"name": "open", "places": {"start": [0, 0, 0]},
+                        "walls": [[[-60, -60], [60, -60], [60, 60], [-60, 60], [-60, -60]]]})
+
+
+@pytest.fixture(scope="module")
+def curvy_log():
+    sim = SimBase(OPEN, errors="ideal", people=False)
+    return sim.run(lambda f: Twist(0.8, 0.35 * math.sin(f.t / 3)), 64)
+
+
+def test_distance_per_count_matches_wheel_turn():
+    p = default_params()
+    assert p.distance_per_count == pytest.approx(math.pi * 0.062 / 400)
+    # one drive-wheel turn is ~1258 counts (4.2.1) and pi * 195 mm of travel
+    turn = encoder_ticks_to_wheel_distance(p.counts_per_wheel_turn)
+    assert turn == pytest.approx(math.pi * 0.195)
+    both = encoder_ticks_to_wheel_distance(np.array([[100, 200]]), correction=(0.99, 1.01))
+    assert both[0, 1] / both[0, 0] == pytest.approx(2 * 1.01 / 0.99)
+
+
+def test_wrap_tick_delta_at_int32():
+    top = 2**31 - 1
+    assert wrap_tick_delta((-(2**31) + 4) - top) == 5
+    assert wrap_tick_delta(top - (-(2**31) + 4)) == -5
+    deltas = wrap_tick_delta(np.array([2**32 - 3, -(2**32) + 7, 12]))
+    assert deltas.tolist() == [-3, 7, 12]
+    assert wrap_tick_delta(3 - 65533, bits=16) == 6
+
+
+def test_step_odometry_survives_counter_wrap():
+    odo = Odometry(start=Pose2D())
+    top = 2**31 - 1
+    odo.update(top - 500, top - 500)
+    pose = odo.update(-(2**31) + 500, -(2**31) + 500)  # 1001 counts each, wrapped
+    assert pose.x == pytest.approx(1001 * default_params().distance_per_count)
+
+
+def test_methods_on_a_circle():
+    """Constant wheel speeds drive an arc: 'exact' lands on it, midpoint nearly, Euler not."""
+    b, radius, steps = 0.44, 2.0, 200
+    arc = math.pi  # half a circle, counter-clockwise
+    d_c = radius * arc / steps
+    d_l = np.full(steps, d_c * (radius - b / 2) / radius)
+    d_r = np.full(steps, d_c * (radius + b / 2) / radius)
+    end = np.array([0.0, 2 * radius])
+    errors = {m: np.hypot(*(integrate_odometry(d_l, d_r, b, method=m)[-1, :2] - end))
+              for m in ("euler", "midpoint", "exact")}
+    assert errors["exact"] < 1e-12
+    assert errors["midpoint"] < 1e-3 < errors["euler"]
+    final = integrate_odometry(d_l, d_r, b, method="exact")[-1, 2]
+    assert abs(abs(final) - math.pi) < 1e-9
+
+
+@pytest.mark.parametrize("method", ["euler", "midpoint", "exact"])
+def test_vectorised_equals_step_by_step(curvy_log, method):
+    log = curvy_log
+    whole = odometry_from_log(log, method=method, correction=(0.99, 1.01), wheel_base=0.45)
+    odo = Odometry(method=method, correction=(0.99, 1.01), wheel_base=0.45,
+                   start=Pose2D(*log.pose[0]))
+    steps = np.array([odo.update(*ticks).as_array() for ticks in log.ticks])
+    assert np.allclose(steps, whole, atol=1e-9)
+
+
+def test_ideal_chair_50_m_error_small(curvy_log):
+    log = curvy_log
+    distance = log.distance_travelled()
+    assert distance > 50
+    for method in ("euler", "midpoint", "exact"):
+        est = odometry_from_log(log, method=method)
+        error = np.hypot(*(est[-1, :2] - log.pose[-1, :2]))
+        assert error / distance < 0.003, (method, error)
+
+
+def test_gyro_odometry_runs_on_log(curvy_log):
+    est = gyro_odometry_from_log(curvy_log, bias=0.0)
+    assert est.shape == curvy_log.pose.shape and np.isfinite(est).all()
+
+
+def test_log_validation_names_the_problem(curvy_log):
+    log = curvy_log
+    t = log.t.copy()
+    t[10] = t[9]
+    with pytest.raises(ValueError, match="not strictly increasing at index 10"):
+        validate_log(dataclasses.replace(log, t=t))
+    t = log.t.copy()
+    t[7] = np.nan
+    with pytest.raises(ValueError, match="missing .* timestamp at index 7"):
+        odometry_from_log(dataclasses.replace(log, t=t))
+    gyro = log.gyro_z.copy()
+    gyro[42] = np.nan
+    with pytest.raises(ValueError, match="gyro_z has a missing .* at index 42"):
+        gyro_odometry_from_log(dataclasses.replace(log, gyro_z=gyro))
+    ticks = log.ticks.astype(float)
+    ticks[3, 1] = np.nan
+    with pytest.raises(ValueError, match="index 3"):
+        validate_log(dataclasses.replace(log, ticks=ticks))
+    with pytest.raises(ValueError, match="method"):
+        Odometry(method="rk4")

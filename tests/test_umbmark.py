@@ -1,0 +1,91 @@
+"""UMBmark (Borenstein and Feng 1996): formulas, the thesis's trials, the simulator."""
+
+import math
+
+import numpy as np
+import pytest
+
+from abcwc.estimation.umbmark import (
+    e_max_syst,
+    load_thesis_trials,
+    model_return_error,
+    run_umbmark,
+    thesis_a16_outputs,
+    trial_covariance,
+    umbmark_corrections,
+)
+from abcwc.sim.base import SimBase
+from abcwc.sim.motor import ChairErrors
+from abcwc.sim.world import world_from_dict
+
+OPEN = world_from_dict({"name": "open", "places": {"start": [0, 0, 0]},
+                        "walls": [[[-10, -10], [10, -10], [10, 10], [-10, 10], [-10, -10]]]})
+
+
+def test_formulas_recover_a_hand_worked_case():
+    """Errors built by the small-angle model from E_d = 1.01, E_b = 1.03 come back."""
+    side, b = 3.5, 0.44
+    e_d, e_b = 1.01, 1.03
+    alpha = math.pi / 2 * (1 - 1 / e_b)  # 0.04575 rad per turn
+    radius = e_b * b / 2 * (e_d + 1) / (e_d - 1)  # 45.55 m
+    beta = 2 * math.asin(side / 2 / radius)  # 0.07686 rad per leg
+    cw = model_return_error(side, b, e_d, e_b, "cw")
+    ccw = model_return_error(side, b, e_d, e_b, "ccw")
+    assert cw[0] == pytest.approx(-2 * side * (alpha + beta))
+    assert ccw[1] == pytest.approx(2 * side * (alpha - beta))
+    for use in ("x", "y", "xy"):
+        result = umbmark_corrections([cw], [ccw], side, b, use=use)
+        assert result.alpha == pytest.approx(alpha)
+        assert result.beta == pytest.approx(beta)
+        assert result.e_d == pytest.approx(e_d)
+        assert result.e_b == pytest.approx(e_b)
+        assert result.wheel_base == pytest.approx(e_b * b)
+        assert result.c_left == pytest.approx(2 / 2.01)
+        assert result.c_right / result.c_left == pytest.approx(e_d)
+    assert e_max_syst([cw], [ccw]) == pytest.approx(math.hypot(*cw))
+
+
+def test_bad_input_is_refused():
+    with pytest.raises(ValueError, match="cw_errors"):
+        umbmark_corrections(np.zeros((0, 2)), [[0, 0]], 3.5, 0.44)
+    with pytest.raises(ValueError, match="use"):
+        umbmark_corrections([[0.1, 0]], [[0, 0]], 3.5, 0.44, use="z")
+
+
+def test_thesis_covariance_reproduced():
+    trials = load_thesis_trials()
+    ends = np.vstack([trials["cw"], trials["ccw"]])
+    assert ends.shape == (10, 3)
+    cov1 = trial_covariance(ends, ddof=1)
+    cov0 = trial_covariance(ends, ddof=0)
+    # x and y of figure 51 follow from MATLAB's cov (n - 1), not from the 1/n formula
+    assert round(cov1[0, 0], 4) == 0.0212 and round(cov0[0, 0], 4) == 0.0190
+    assert round(cov1[1, 1], 4) == 0.0041 and round(cov0[1, 1], 4) == 0.0037
+    # theta's 0.0042 does not follow from the table's ten values (0.0038 / 0.0034) ...
+    assert round(cov1[2, 2], 4) == 0.0038 and round(cov0[2, 2], 4) == 0.0034
+    # ... but from A.16's nine-value theta vector
+    a16 = thesis_a16_outputs(trials)
+    assert round(a16["cov_theta"], 4) == 0.0042
+    # and the off-diagonal terms it prints as 0 are not zero
+    assert abs(cov1[0, 1]) > 0.002
+
+
+def test_umbmark_in_the_simulator_cuts_systematic_error():
+    errors = ChairErrors(drive_wheel_left=1.0, drive_wheel_right=1.01,
+                         encoder_wheel_left=0.995, encoder_wheel_right=1.005, wheel_base=1.03)
+
+    def make(seed):
+        return SimBase(OPEN, seed=seed, errors=errors, people=False)
+
+    cw, ccw = run_umbmark(make, runs=1, side=3.5)
+    result = umbmark_corrections(cw, ccw, 3.5, 0.44)
+    cw2, ccw2 = run_umbmark(make, runs=1, side=3.5, correction=result.correction,
+                            wheel_base=result.wheel_base)
+    before, after = result.e_max_syst, e_max_syst(cw2, ccw2)
+    assert before > 0.5
+    assert after < before / 5, (before, after)
+    # injected: E_d = 1.005 / 0.995, E_b = 1.03, so c = (0.995, 1.005)
+    assert result.e_d == pytest.approx(1.005 / 0.995, abs=0.002)
+    assert result.e_b == pytest.approx(1.03, abs=0.005)
+    assert result.c_left == pytest.approx(0.995, abs=0.001)
+    assert result.c_right == pytest.approx(1.005, abs=0.001)

@@ -88,8 +88,8 @@ class StatusFlags(IntFlag):
     WATCHDOG_TRIPPED = 2  # no valid command for the watchdog timeout: pots neutral
     JOYSTICK_FAULT = 4  # implausible joystick reading: pots neutral
     IMU_FAULT = 8
-    SPEED_CAPPED = 16  # a host command was limited by the speed cap
-    CLAMPED = 32  # a host command was clamped into the safe pot range
+    SPEED_CAPPED = 16  # a host command was changed: speed cap or safe pot range
+    HOST_ACTIVE = 32  # a host command drives the pots
 
 
 @dataclass(frozen=True)

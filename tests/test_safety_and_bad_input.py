@@ -49,7 +49,7 @@ def test_pot_outputs_are_clamped_to_the_safe_range():
     board.command(PotCommand(255, 0), now=0.0)
     out = board.update(0.0, 254, 254)
     assert out.pots == PotCommand(253, 8)
-    assert out.flags & StatusFlags.CLAMPED
+    assert out.flags & StatusFlags.SPEED_CAPPED and out.flags & StatusFlags.HOST_ACTIVE
 
 
 def test_speed_cap_limits_host_but_not_joystick():

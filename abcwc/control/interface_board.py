@@ -95,14 +95,12 @@ class InterfaceBoard:
         if self._command is None or stale or not self._command_fresh:
             self._command_fresh = False
             return BoardOutput(neutral, StatusFlags.WATCHDOG_TRIPPED)
-        flags = StatusFlags.NONE
+        flags = StatusFlags.HOST_ACTIVE
         bytes_out = []
         for value in (self._command.fb, self._command.lr):
             safe = min(max(value, p.pot_safe_min), p.pot_safe_max)
-            if safe != value:
-                flags |= StatusFlags.CLAMPED
             capped = min(max(safe, p.pot_neutral - self.speed_cap), p.pot_neutral + self.speed_cap)
-            if capped != safe:
+            if capped != value:
                 flags |= StatusFlags.SPEED_CAPPED
             bytes_out.append(capped)
         return BoardOutput(PotCommand(*bytes_out), flags)

@@ -1,0 +1,100 @@
+"""Checks for chapter 02, speed and turn control (thesis 4.1.5, 4.3.4, A.5, A.14).
+
+* :func:`turn_value_check` — eqn 2, ``turn = 254 - 1.6 * angle`` (angle in degrees,
+  positive to the left), against the thesis's worked example and both ends of the
+  joystick's range.
+* :func:`twist_to_pots_check` — the calibrated velocity controller, ``(v, w) ->
+  PotCommand``, the inverse of the motor controller's model, compared with
+  :func:`abcwc.control.twist_to_pot_command` over a sweep of speeds and turn rates.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from abcwc.checks.report import checker, expect, expect_close, expect_equal, format_value
+from abcwc.control.pots import turn_value
+from abcwc.control.velocity import twist_to_pot_command
+from abcwc.params import default_params
+from abcwc.types import Twist
+
+__all__ = ["TURN_VALUES", "turn_value_check", "twist_to_pots_check"]
+
+# (angle in degrees, + = left; pot-scale value; where it comes from)
+TURN_VALUES = (
+    (0.0, 254.0, "straight ahead: the centre"),
+    (-45.0, 326.0, "the thesis's worked example, 254 + 1.6 * 45, a right turn"),
+    (45.0, 182.0, "the same turn to the left"),
+    (90.0, 110.0, "full left, the joystick's end"),
+    (-90.0, 398.0, "full right, the joystick's end"),
+)
+
+
+@checker("eqn 2, turn value")
+def turn_value_check(fn: Callable[[float], float]) -> str:
+    """Compare ``fn(angle_deg)`` with eqn 2 at the thesis's values and every 7.5 degrees."""
+    for angle, expected, why in TURN_VALUES:
+        expect_close(fn(angle), expected, what=f"angle {angle:+g} deg", rtol=0.0, atol=1e-6,
+                     ref=f"eqn 2; {why}")
+    sweep = [float(a) for a in np.arange(-90.0, 90.0 + 1e-9, 7.5)] + [1.0, -12.5, 33.3, -71.1]
+    for angle in sweep:
+        expect_close(fn(angle), turn_value(angle), what=f"angle {angle:+g} deg", rtol=0.0,
+                     atol=1e-6, ref="eqn 2, not rounded: eqn 1 truncates later")
+    return (f"the worked example (326), both ends (110, 398) and {len(sweep)} angles "
+            "from -90 to +90 deg match")
+
+
+def _byte(value: object, what: str) -> int:
+    """A pot byte from the student's answer, or NotYet saying what came back."""
+    expect(isinstance(value, int | np.integer) and not isinstance(value, bool),
+           f"{what} is {format_value(value)}; pot bytes are whole numbers (int)")
+    return int(value)
+
+
+def _pots(fn: Callable[[float, float], object], v: float, w: float) -> tuple[int, int]:
+    command = fn(v, w)
+    what = f"twist_to_pots({v:g}, {w:g})"
+    expect(hasattr(command, "fb") and hasattr(command, "lr"),
+           f"{what} returned {format_value(command)}; return a PotCommand(fb, lr)")
+    return _byte(command.fb, f"{what}.fb"), _byte(command.lr, f"{what}.lr")
+
+
+@checker("calibrated velocity controller")
+def twist_to_pots_check(fn: Callable[[float, float], object]) -> str:
+    """Compare ``fn(v, w) -> PotCommand`` with :func:`twist_to_pot_command`.
+
+    Standing still must give exactly (128, 128), and the direction of each axis must
+    be right (FB above 128 = forward, LR below 128 = left). Over a sweep of speeds
+    (-2..2 m/s), turn rates (-2..2 rad/s) and a grid of both together, every byte may
+    differ from the library's by at most 1: where a request falls half-way between
+    two bytes, rounding in m/s, in mm/s, or Python's round-half-to-even may pick
+    either neighbour, and one byte is only 14 mm/s or 0.7 deg/s.
+    """
+    p = default_params()
+    expect_equal(_pots(fn, 0.0, 0.0), (p.pot_neutral, p.pot_neutral),
+                 what="standing still, (fb, lr)", ref="both pots at neutral")
+    fb, _ = _pots(fn, 0.5, 0.0)
+    expect(fb > p.pot_neutral,
+           f"0.5 m/s forward gave fb {fb}; forward is FB above {p.pot_neutral}")
+    _, lr = _pots(fn, 0.0, 0.5)
+    expect(lr < p.pot_neutral,
+           f"w = +0.5 rad/s (a left turn) gave lr {lr}; a left turn is LR below "
+           f"{p.pot_neutral}")
+    axis = np.round(np.arange(-2.0, 2.0 + 1e-9, 0.01), 2)
+    both = np.round(np.arange(-1.5, 1.5 + 1e-9, 0.25), 2)
+    cases = ([(float(v), 0.0) for v in axis] + [(0.0, float(w)) for w in axis]
+             + [(float(v), float(w)) for v in both for w in both])
+    exact = 0
+    for v, w in cases:
+        got = _pots(fn, v, w)
+        expected = twist_to_pot_command(Twist(v, w))
+        for name, g, e in zip(("fb", "lr"), got, (expected.fb, expected.lr)):
+            expect(abs(g - e) <= 1,
+                   f"twist_to_pots({v:g}, {w:g}).{name} gave {g}, expected {e} ± 1 "
+                   f"(the motor model: 128 ± (2 + 123 |value| / full scale), "
+                   f"kept in {p.pot_safe_min}..{p.pot_safe_max})")
+        exact += got == (expected.fb, expected.lr)
+    return (f"{len(cases)} commands within ±1 byte of abcwc's controller "
+            f"({exact} of them exactly equal)")

@@ -1,0 +1,207 @@
+"""The exercise checks of chapters 02 (speed and turn control) and 03 (sonar avoidance).
+
+Each check must pass a correct answer, and report "not yet" (never raise) for a wrong
+one and for an exercise that is not written yet.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from abcwc.checks import NOT_YET, PASS, ch02, ch03
+from abcwc.control import turn_value, twist_to_pot_command
+from abcwc.navigation import SonarAvoider
+from abcwc.params import default_params
+from abcwc.types import PotCommand, Twist
+
+
+def not_written(*args):
+    # YOUR CODE HERE
+    raise NotImplementedError("exercise: replace these lines with your code")
+
+
+def assert_pass(result, capsys) -> None:
+    out = capsys.readouterr().out
+    assert result.passed, result.line
+    assert out.startswith(PASS) and out.count("\n") == 1
+
+
+def assert_not_yet(result, capsys, *fragments: str) -> None:
+    out = capsys.readouterr().out
+    assert not result.passed
+    assert out.startswith(NOT_YET) and out.count("\n") == 1
+    for fragment in fragments:
+        assert fragment in out, out
+
+
+# --- chapter 02: eqn 2 ----------------------------------------------------------------
+
+
+def test_turn_value_passes_eqn_2(capsys):
+    assert_pass(ch02.turn_value_check(turn_value), capsys)
+    assert_pass(ch02.turn_value_check(lambda angle: 254 - 1.6 * angle), capsys)
+
+
+def test_turn_value_with_the_sign_flipped_is_not_yet(capsys):
+    result = ch02.turn_value_check(lambda angle: 254 + 1.6 * angle)
+    assert_not_yet(result, capsys, "angle -45 deg gave 182, expected 326", "worked example")
+
+
+def test_turn_value_truncated_is_not_yet(capsys):
+    result = ch02.turn_value_check(lambda angle: int(254 - 1.6 * angle))
+    assert_not_yet(result, capsys, "eqn 2")
+
+
+def test_turn_value_not_written(capsys):
+    assert_not_yet(ch02.turn_value_check(not_written), capsys, "not written yet")
+
+
+# --- chapter 02: the calibrated velocity controller -----------------------------------
+
+
+def library_pots(v: float, w: float) -> PotCommand:
+    return twist_to_pot_command(Twist(v, w))
+
+
+def float_pots(v: float, w: float) -> PotCommand:
+    """The inverse of the motor model in floating point (a correct student answer)."""
+    p = default_params()
+    span = p.pot_full_scale_offset - p.pot_dead_band
+
+    def offset(value: float, full: float) -> int:
+        steps = round(min(abs(value) / full, 1.0) * span)
+        return 0 if steps == 0 else int(math.copysign(p.pot_dead_band + steps, value))
+
+    def safe(byte: int) -> int:
+        return min(max(byte, p.pot_safe_min), p.pot_safe_max)
+
+    return PotCommand(safe(128 + offset(v, p.max_speed)), safe(128 - offset(w, p.max_turn_rate)))
+
+
+@pytest.mark.parametrize("fn", [library_pots, float_pots])
+def test_twist_to_pots_passes_the_inverse_motor_model(fn, capsys):
+    assert_pass(ch02.twist_to_pots_check(fn), capsys)
+
+
+def test_twist_to_pots_off_by_two_is_not_yet(capsys):
+    def off(v, w):
+        command = library_pots(v, w)
+        fb = command.fb + 2 if command.fb > 140 else command.fb
+        return PotCommand(min(fb, 253), command.lr)
+
+    assert_not_yet(ch02.twist_to_pots_check(off), capsys, "± 1")
+
+
+def test_twist_to_pots_without_the_safe_range_is_not_yet(capsys):
+    def unclamped(v, w):
+        command = library_pots(v, w)
+        return PotCommand(3 if command.fb == 8 else command.fb, command.lr)
+
+    assert_not_yet(ch02.twist_to_pots_check(unclamped), capsys, "gave 3, expected 8")
+
+
+def test_twist_to_pots_with_left_and_right_swapped_is_not_yet(capsys):
+    def swapped(v, w):
+        return library_pots(v, -w)
+
+    assert_not_yet(ch02.twist_to_pots_check(swapped), capsys, "left turn is LR below 128")
+
+
+def test_twist_to_pots_the_thesis_controller_is_not_yet(capsys):
+    from abcwc.control import thesis_twist_to_pots
+
+    result = ch02.twist_to_pots_check(lambda v, w: thesis_twist_to_pots(Twist(v, w)))
+    assert_not_yet(result, capsys, "standing still")
+
+
+def test_twist_to_pots_must_return_whole_bytes(capsys):
+    result = ch02.twist_to_pots_check(lambda v, w: PotCommand(128, 128) if v == w == 0
+                                      else type("P", (), {"fb": 128.5, "lr": 128})())
+    assert_not_yet(result, capsys, "whole numbers")
+
+
+def test_twist_to_pots_not_written(capsys):
+    assert_not_yet(ch02.twist_to_pots_check(not_written), capsys, "not written yet")
+
+
+# --- chapter 03: table 7 ---------------------------------------------------------------
+
+
+def student_table7(distance_m):
+    mm = distance_m * 1000
+    if mm > 1000:
+        return 0.0
+    if mm < 200:
+        return None
+    return 45 + (10 - mm / 100) * 5.625
+
+
+@pytest.mark.parametrize("fn", [ch03.table7_turn_angle, student_table7])
+def test_turn_angle_passes_table_7(fn, capsys):
+    assert_pass(ch03.turn_angle_check(fn), capsys)
+
+
+def test_table7_turn_angle_values():
+    assert ch03.table7_turn_angle(0.55) == pytest.approx(70.3125)
+    assert ch03.table7_turn_angle(1.2) == 0.0
+    assert ch03.table7_turn_angle(0.1) is None
+
+
+def test_turn_angle_in_millimetres_is_not_yet(capsys):
+    result = ch03.turn_angle_check(lambda d: student_table7(d / 1000))
+    assert_not_yet(result, capsys, "expected 0 deg")
+
+
+def test_turn_angle_without_the_45_degree_base_is_not_yet(capsys):
+    def no_base(d):
+        angle = student_table7(d)
+        return angle - 45 if angle else angle
+
+    assert_not_yet(ch03.turn_angle_check(no_base), capsys, "1 m gave 0", "expected 45")
+
+
+def test_turn_angle_that_never_reverses_is_not_yet(capsys):
+    result = ch03.turn_angle_check(lambda d: student_table7(max(d, 0.2)))
+    assert_not_yet(result, capsys, "expected None")
+
+
+def test_turn_angle_not_written(capsys):
+    assert_not_yet(ch03.turn_angle_check(not_written), capsys, "not written yet")
+
+
+# --- chapter 03: wandering the lab -------------------------------------------------------
+
+
+def test_wander_passes_the_library_avoider(capsys):
+    assert_pass(ch03.wander_check(SonarAvoider), capsys)
+
+
+def test_wander_accepts_a_factory_or_a_controller(capsys):
+    assert_pass(ch03.wander_check(lambda: SonarAvoider()), capsys)
+    # a controller object itself (a callable taking a frame) is used as it is
+    assert ch03._make_controller(lambda frame: None) is not None
+
+
+def test_wander_straight_ahead_collides(capsys):
+    result = ch03.wander_check(lambda frame: Twist(0.8, 0.0))
+    assert_not_yet(result, capsys, "touched something")
+
+
+def test_wander_standing_still_is_not_yet(capsys):
+    result = ch03.wander_check(lambda frame: PotCommand(128, 128))
+    assert_not_yet(result, capsys, "drove only 0.0 m")
+
+
+def test_wander_hides_the_ground_truth(capsys):
+    result = ch03.wander_check(lambda frame: Twist(0.5 if frame.pose.x < 5 else 0.0, 0.0))
+    assert_not_yet(result, capsys, "AttributeError")
+
+
+def test_wander_not_written(capsys):
+    class Stub:
+        def __call__(self, frame):
+            return not_written(frame)
+
+    assert_not_yet(ch03.wander_check(Stub), capsys, "not written yet")

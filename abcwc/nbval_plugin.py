@@ -1,6 +1,7 @@
-"""pytest configuration for running the course notebooks with nbval.
+"""pytest plugin for running the course notebooks with nbval.
 
-With ``--nbval`` (set in pyproject's addopts), every notebook that pytest collects runs
+Loaded with ``-p abcwc.nbval_plugin`` (pyproject's addopts). With ``--nbval`` (set
+there too), every notebook that pytest collects runs
 in a fresh kernel, one test per code cell:
 
 - ``solutions/*.ipynb`` are stored with their outputs, and every cell's new output must
@@ -24,18 +25,16 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent
-LAX_DIRS = (ROOT / "course",)
-SANITIZE_FILE = ROOT / "tests" / "nbval_sanitize.cfg"
+from abcwc.paths import REPO_ROOT as ROOT
+
+LAX_DIR = "course"  # under the pytest rootdir
+SANITIZE_FILE = "tests/nbval_sanitize.cfg"  # under the pytest rootdir
 KERNEL_ENV = {
     "MPLBACKEND": "module://matplotlib_inline.backend_inline",
     "PYTHONHASHSEED": "0",
     "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
     "ABCWC_PORT": None,  # None: removed from the kernel's environment
 }
-
-# The example notebooks under tests/data are run by tests/test_course_build.py itself.
-collect_ignore_glob = ["tests/data/*"]
 
 try:
     from nbval.plugin import IPyNbFile, get_sanitize_patterns
@@ -71,7 +70,8 @@ if IPyNbFile is not None:
 
         def __init__(self, *args, **kwargs) -> None:
             super().__init__(*args, **kwargs)
-            if any(self.path.resolve().is_relative_to(lax) for lax in LAX_DIRS):
+            lax_dir = (self.config.rootpath / LAX_DIR).resolve()
+            if self.path.resolve().is_relative_to(lax_dir):
                 self.compare_outputs = False
 
         def setup(self) -> None:
@@ -79,8 +79,9 @@ if IPyNbFile is not None:
                 super().setup()
 
         def setup_sanitize_files(self) -> None:
-            if SANITIZE_FILE.is_file():
-                patterns = get_sanitize_patterns(SANITIZE_FILE.read_text(encoding="utf-8"))
+            sanitize_file = self.config.rootpath / SANITIZE_FILE
+            if sanitize_file.is_file():
+                patterns = get_sanitize_patterns(sanitize_file.read_text(encoding="utf-8"))
                 self.sanitize_patterns.update(patterns)
             super().setup_sanitize_files()
 

@@ -348,7 +348,8 @@ def test_solution_notebooks_are_stored_run_top_to_bottom(path):
 
 NBVAL_INI = """\
 [pytest]
-addopts = --nbval --nbval-current-env --nbval-cell-timeout=120 -p no:cacheprovider
+addopts = -p abcwc.nbval_plugin --nbval --nbval-current-env --nbval-cell-timeout=120
+    -p no:cacheprovider
 testpaths = solutions course
 """
 
@@ -356,7 +357,6 @@ testpaths = solutions course
 @pytest.fixture
 def nbval_workspace(tmp_path: Path) -> Path:
     """A copy of the repository's notebook test setup with the example chapter built."""
-    shutil.copy(ROOT / "conftest.py", tmp_path / "conftest.py")
     (tmp_path / "tests").mkdir()
     shutil.copy(ROOT / "tests" / "nbval_sanitize.cfg", tmp_path / "tests")
     (tmp_path / "pytest.ini").write_text(NBVAL_INI)

@@ -3,17 +3,21 @@
 Both bodies offer the same surface: ``send(PotCommand | Twist)``, ``step() ->
 SensorFrame`` (one 20 ms control period), ``read()``, ``stop()``,
 ``set_speed_cap()``, ``run(controller, seconds) -> RunLog``, ``drive(command,
-seconds)`` and ``close()``.
+seconds)``, ``close()``, ``last_command`` and ``log_meta()``; :func:`run_controller`
+is the one control loop behind every ``run``.
 """
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from typing import Protocol, runtime_checkable
 
-from abcwc.log import RunLog
+from abcwc.log import LogRecorder, RunLog
 from abcwc.types import PotCommand, SensorFrame, Twist
+
+Controller = Callable[[SensorFrame], "PotCommand | Twist | None"]
 
 
 @runtime_checkable
@@ -27,10 +31,43 @@ class Base(Protocol):
     def read(self) -> SensorFrame: ...
     def stop(self) -> None: ...
     def set_speed_cap(self, offset: int) -> None: ...
-    def run(self, controller: Callable[[SensorFrame], PotCommand | Twist | None],
-            seconds: float, progress: bool = False) -> RunLog: ...
+    def run(self, controller: Controller, seconds: float, progress: bool = False) -> RunLog: ...
     def drive(self, command: PotCommand | Twist, seconds: float) -> RunLog: ...
     def close(self) -> None: ...
+    def log_meta(self) -> dict: ...
+
+    @property
+    def last_command(self) -> PotCommand | None: ...
+
+
+def run_controller(chair: Base, controller: Controller, seconds: float,
+                   progress: bool = False, verb: str = "driving") -> RunLog:
+    """The control loop every body's ``run`` uses.
+
+    Every period: ``controller(latest frame)``; send what it returns (a PotCommand, a
+    Twist, or None: send nothing, so after 250 ms the watchdog stops the chair); step;
+    record the frame, the command and its pot bytes. ``progress`` shows a tqdm bar
+    labelled "<verb> <seconds> s".
+    """
+    if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds >= 0):
+        raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
+    steps = round(seconds / chair.period)
+    recorder = LogRecorder(chair.log_meta())
+    iterator = range(steps)
+    if progress:
+        from tqdm.auto import tqdm
+
+        iterator = tqdm(iterator, desc=f"{verb} {seconds:g} s", unit="step")
+    frame = chair.read()
+    for _ in iterator:
+        command = controller(frame)
+        sent = None
+        if command is not None:
+            chair.send(command)
+            sent = chair.last_command
+        frame = chair.step()
+        recorder.add(frame, command, sent)
+    return recorder.build()
 
 
 def connect(port: str | None = None, **options: object) -> Base:

@@ -31,13 +31,13 @@ import os
 import re
 import time
 from collections import deque
-from collections.abc import Callable
 
 import numpy as np
 
+from abcwc.base import Controller, run_controller
 from abcwc.control.velocity import twist_to_pot_command
 from abcwc.hw import protocol as P
-from abcwc.log import LogRecorder, RunLog
+from abcwc.log import RunLog
 from abcwc.types import PotCommand, SensorFrame, StatusFlags, Twist
 
 __all__ = [
@@ -52,7 +52,6 @@ __all__ = [
     "list_ports",
 ]
 
-Controller = Callable[[SensorFrame], "PotCommand | Twist | None"]
 
 SPEED_CAP_ENV = "ABCWC_SPEED_CAP"
 """Environment variable holding the hardware speed cap (pot bytes from 128)."""
@@ -421,32 +420,14 @@ class SerialBase:
         250 ms the chair's watchdog stops it). A link failure stops the chair (if it
         can still hear) and raises ChairLinkError.
         """
-        if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds >= 0):
-            raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
-        steps = round(seconds / self.period)
-        recorder = LogRecorder(self.log_meta())
-        iterator = range(steps)
-        if progress:
-            from tqdm.auto import tqdm
-
-            iterator = tqdm(iterator, desc=f"driving {seconds:g} s", unit="step")
-        frame = self._frame
         try:
-            for _ in iterator:
-                command = controller(frame)
-                sent = None
-                if command is not None:
-                    self.send(command)
-                    sent = self._last_command
-                frame = self.step()
-                recorder.add(frame, command, sent)
+            return run_controller(self, controller, seconds, progress, verb="driving")
         except BaseException:
             try:
                 self.stop()
             except Exception:  # noqa: BLE001 - the link may be gone
                 pass
             raise
-        return recorder.build()
 
     def drive(self, command: PotCommand | Twist, seconds: float) -> RunLog:
         """Send the same command every period for ``seconds``."""

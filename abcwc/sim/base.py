@@ -15,13 +15,13 @@ wheel speeds (:mod:`abcwc.sim.motor`), physics advances, and the sensors report.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 import pymunk
 
+from abcwc.base import Controller, run_controller
 from abcwc.control.interface_board import InterfaceBoard
-from abcwc.log import LogRecorder, RunLog
+from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.sim.motor import ChairErrors, MotorController, resolve_errors
 from abcwc.sim.people import PERSON_COLLISION_TYPE, Walker, circles_of
@@ -36,7 +36,6 @@ TYRE_FRICTION = 0.8  # rubber on indoor floor
 GRAVITY = 9.81
 PHYSICS_SUBSTEPS = 1  # 20 ms steps: the tyres never need more than their grip
 
-Controller = Callable[[SensorFrame], "PotCommand | Twist | None"]
 
 
 class SimBase:
@@ -163,6 +162,11 @@ class SimBase:
         """The latest SensorFrame (same as :attr:`frame`)."""
         return self._frame
 
+    @property
+    def last_command(self) -> PotCommand | None:
+        """The last host command as pot bytes (before the board's clamps and cap)."""
+        return self.board.last_command
+
     # ----------------------------------------------------------------- commands
     def send(self, command: PotCommand | Twist) -> None:
         """Send a command; it holds until replaced or until the 250 ms watchdog."""
@@ -258,25 +262,7 @@ class SimBase:
         The controller returns a PotCommand, a Twist, or None (send nothing: after
         250 ms the watchdog stops the chair). Returns the whole run as a RunLog.
         """
-        if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds >= 0):
-            raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
-        steps = round(seconds / self.period)
-        recorder = LogRecorder(self.log_meta())
-        iterator = range(steps)
-        if progress:
-            from tqdm.auto import tqdm
-
-            iterator = tqdm(iterator, desc=f"simulating {seconds:g} s", unit="step")
-        frame = self._frame
-        for _ in iterator:
-            command = controller(frame)
-            sent = None
-            if command is not None:
-                self.send(command)
-                sent = self.board.last_command
-            frame = self.step()
-            recorder.add(frame, command, sent)
-        return recorder.build()
+        return run_controller(self, controller, seconds, progress, verb="simulating")
 
     def drive(self, command: PotCommand | Twist, seconds: float) -> RunLog:
         """Send the same command every period for ``seconds``."""

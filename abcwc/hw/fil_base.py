@@ -35,7 +35,7 @@ from pathlib import Path
 from abcwc.hw import protocol as P
 from abcwc.hw.serial_base import ChairLinkError, SerialBase, _check_cap
 from abcwc.params import ChairParams
-from abcwc.sim.base import PHYSICS_SUBSTEPS, SimBase
+from abcwc.sim.base import SimBase
 from abcwc.sim.motor import ChairErrors
 from abcwc.sim.world import World
 from abcwc.types import Pose2D, PotCommand, SensorFrame
@@ -261,7 +261,7 @@ class FirmwareInLoopBase(SerialBase):
             self._enc_sent = [left, right]
         raw = round(math.degrees(gyro_z) * P.GYRO_LSB_PER_DEG_S)
         self._set_input("G", f"G {max(-32768, min(32767, raw))}")
-        sonar = sim._sonar_reading
+        sonar = sim.frame.sonar
         mm = round(sonar * 1000) if math.isfinite(sonar) and sonar > 0 else 0
         self._set_input("S", f"S {max(0, min(65535, mm))}")
         self._set_input("J", f"J {sim.joystick[0]} {sim.joystick[1]}")
@@ -317,24 +317,8 @@ class FirmwareInLoopBase(SerialBase):
         self._flush_pending()
         tel = self._period_telemetry()
         pots = self.firmware_pots()
-        # The physics of SimBase.step, with the firmware's pots instead of the board's.
-        dt = self.period
-        sim.encoders.advance(*sim._surface_speeds, dt)
-        motion = sim.motors.advance(pots)
-        sim._surface_speeds = (motion.surface_left, motion.surface_right)
-        theta = sim.chair.angle
-        sim._control.velocity = (motion.v * math.cos(theta), motion.v * math.sin(theta))
-        sim._control.angular_velocity = motion.w
-        for walker in sim.walkers:
-            walker.steer(dt)
-        for _ in range(PHYSICS_SUBSTEPS):
-            sim.space.step(dt / PHYSICS_SUBSTEPS)
-        sim.steps += 1
-        sim.t = sim.steps * dt
-        gyro_z = sim.gyro.read(sim.chair.angular_velocity)
-        sim._read_slow_sensors()
-        sim._pots = pots
-        sim._frame = sim._make_frame(gyro_z)
+        # the simulated chair runs on the firmware's pots instead of the Python board's
+        gyro_z = sim.step_with_pots(pots).gyro_z
         self._push_inputs(gyro_z)
         self._frame = self._merge(self._frame_from(tel))
         self.sim_steps += 1

@@ -206,13 +206,22 @@ class SimBase:
     # ----------------------------------------------------------------- stepping
     def step(self) -> SensorFrame:
         """Advance one control period and return the new SensorFrame."""
-        dt = self.period
         out = self.board.update(self.t, *self.joystick)
-        self._pots, self._flags = out.pots, out.flags
+        return self.step_with_pots(out.pots, out.flags)
+
+    def step_with_pots(self, pots: PotCommand,
+                       flags: StatusFlags = StatusFlags.NONE) -> SensorFrame:
+        """Advance one control period with ``pots`` on the motor controller.
+
+        :meth:`step` calls this with the interface board's decision; a firmware in
+        the loop calls it with the bytes the real firmware wrote, bypassing the board.
+        """
+        dt = self.period
+        self._pots, self._flags = pots, flags
         # pymunk moves bodies with the velocities solved in the previous step, then
         # solves new ones: this step executes the wheel motion decided last period.
         self.encoders.advance(*self._surface_speeds, dt)
-        motion = self.motors.advance(out.pots)
+        motion = self.motors.advance(pots)
         self._surface_speeds = (motion.surface_left, motion.surface_right)
         theta = self.chair.angle
         self._control.velocity = (motion.v * math.cos(theta), motion.v * math.sin(theta))

@@ -1,6 +1,12 @@
 """Pot control: joystick and angle maps, velocity controllers, the board's safety."""
 
-from abcwc.control.interface_board import BoardOutput, InterfaceBoard
+from abcwc.control.interface_board import (
+    BoardOutput,
+    InterfaceBoard,
+    cap_pot_byte,
+    check_speed_cap,
+    joystick_state,
+)
 from abcwc.control.pots import (
     TABLE_6_AS_PRINTED,
     AvoidAction,
@@ -8,6 +14,7 @@ from abcwc.control.pots import (
     angle_to_lr_byte,
     clamp_pot_byte,
     direction_pot_command,
+    joystick_adc_to_pot_byte,
     joystick_to_pot_byte,
     pot_byte_to_deflection,
     sonar_turn_angle,
@@ -17,6 +24,7 @@ from abcwc.control.velocity import (
     thesis_twist_to_pots,
     twist_to_pot_bytes_int,
     twist_to_pot_command,
+    twist_to_wire_units,
 )
 
 __all__ = [
@@ -26,8 +34,12 @@ __all__ = [
     "InterfaceBoard",
     "SonarDecision",
     "angle_to_lr_byte",
+    "cap_pot_byte",
+    "check_speed_cap",
     "clamp_pot_byte",
     "direction_pot_command",
+    "joystick_adc_to_pot_byte",
+    "joystick_state",
     "joystick_to_pot_byte",
     "pot_byte_to_deflection",
     "sonar_turn_angle",
@@ -35,4 +47,5 @@ __all__ = [
     "turn_value",
     "twist_to_pot_bytes_int",
     "twist_to_pot_command",
+    "twist_to_wire_units",
 ]

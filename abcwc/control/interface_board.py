@@ -19,7 +19,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from abcwc.control.pots import joystick_to_pot_byte
+import numpy as np
+
+from abcwc.control.pots import clamp_pot_byte, joystick_adc_to_pot_byte
 from abcwc.control.velocity import twist_to_pot_command
 from abcwc.params import ChairParams, default_params
 from abcwc.types import PotCommand, StatusFlags, Twist
@@ -28,6 +30,36 @@ from abcwc.types import PotCommand, StatusFlags, Twist
 # (disconnected: near 0; shorted: near 1023).
 JOYSTICK_PLAUSIBLE_MIN = 60
 JOYSTICK_PLAUSIBLE_MAX = 450
+
+
+def joystick_state(fb_adc: int, lr_adc: int, params: ChairParams | None = None) -> str:
+    """``"fault"`` if a reading is outside 60..450 (no working joystick reads that),
+    else ``"deflected"`` if a channel is outside the dead band 248..260, else
+    ``"neutral"``. Unlike A.18's checkjoystick, either axis alone counts."""
+    p = params or default_params()
+    readings = (fb_adc, lr_adc)
+    if any(not JOYSTICK_PLAUSIBLE_MIN <= r <= JOYSTICK_PLAUSIBLE_MAX for r in readings):
+        return "fault"
+    if any(not p.joystick_dead_band_low <= r <= p.joystick_dead_band_high for r in readings):
+        return "deflected"
+    return "neutral"
+
+
+def check_speed_cap(offset: object, params: ChairParams | None = None) -> int:
+    """A host speed cap (largest |pot byte - 128|, 0..125) as an int, or ValueError."""
+    full = (params or default_params()).pot_full_scale_offset
+    if isinstance(offset, bool) or not isinstance(offset, (int, np.integer)) \
+            or not 0 <= int(offset) <= full:
+        raise ValueError(f"speed cap {offset!r} outside 0..{full} (pot bytes from 128)")
+    return int(offset)
+
+
+def cap_pot_byte(byte: int, cap: int, params: ChairParams | None = None) -> int:
+    """A host pot byte limited to ``128 +- cap`` (a cap above 125 means 125) and to
+    the safe range 8..253, as the board (and the firmware's CONFIGURE caps) do."""
+    p = params or default_params()
+    c = min(int(cap), p.pot_full_scale_offset)
+    return clamp_pot_byte(min(max(int(byte), p.pot_neutral - c), p.pot_neutral + c), p)
 
 
 @dataclass(frozen=True)
@@ -52,10 +84,7 @@ class InterfaceBoard:
 
     def set_speed_cap(self, offset: int) -> None:
         """Limit host commands to ``128 +- offset`` on each channel (0..125)."""
-        full = self.params.pot_full_scale_offset
-        if isinstance(offset, bool) or not isinstance(offset, int) or not 0 <= offset <= full:
-            raise ValueError(f"speed cap {offset!r} outside 0..{full} (pot bytes from 128)")
-        self.speed_cap = offset
+        self.speed_cap = check_speed_cap(offset, self.params)
 
     def command(self, command: PotCommand | Twist, now: float) -> None:
         """Accept a host command at time ``now`` (s); it feeds the watchdog."""
@@ -80,17 +109,16 @@ class InterfaceBoard:
         """One firmware loop: decide the pot bytes from the joystick and last command."""
         p = self.params
         neutral = PotCommand(p.pot_neutral, p.pot_neutral)
-        readings = (joystick_fb, joystick_lr)
-        if any(not JOYSTICK_PLAUSIBLE_MIN <= r <= JOYSTICK_PLAUSIBLE_MAX for r in readings):
+        state = joystick_state(joystick_fb, joystick_lr, p)
+        if state == "fault":
             self._command_fresh = False
             return BoardOutput(neutral, StatusFlags.JOYSTICK_FAULT)
-        if any(not p.joystick_dead_band_low <= r <= p.joystick_dead_band_high for r in readings):
-            fb, lr = (
-                joystick_to_pot_byte(min(max(r, p.joystick_min), p.joystick_max), p)
-                for r in readings
-            )
+        if state == "deflected":
             self._command_fresh = False
-            return BoardOutput(PotCommand(fb, lr), StatusFlags.JOYSTICK_OVERRIDE)
+            return BoardOutput(
+                PotCommand(joystick_adc_to_pot_byte(joystick_fb, p),
+                           joystick_adc_to_pot_byte(joystick_lr, p)),
+                StatusFlags.JOYSTICK_OVERRIDE)
         stale = now - self._command_time > p.watchdog_timeout + 1e-9
         if self._command is None or stale or not self._command_fresh:
             self._command_fresh = False
@@ -98,8 +126,7 @@ class InterfaceBoard:
         flags = StatusFlags.HOST_ACTIVE
         bytes_out = []
         for value in (self._command.fb, self._command.lr):
-            safe = min(max(value, p.pot_safe_min), p.pot_safe_max)
-            capped = min(max(safe, p.pot_neutral - self.speed_cap), p.pot_neutral + self.speed_cap)
+            capped = cap_pot_byte(value, self.speed_cap, p)
             if capped != value:
                 flags |= StatusFlags.SPEED_CAPPED
             bytes_out.append(capped)

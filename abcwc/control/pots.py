@@ -46,6 +46,13 @@ def joystick_to_pot_byte(value: float, params: ChairParams | None = None) -> int
     return (int(number) - p.eqn1_offset) * multiplier_percent // 100
 
 
+def joystick_adc_to_pot_byte(adc: int, params: ChairParams | None = None) -> int:
+    """What the interface board does with any joystick ADC reading: clamp it into
+    the joystick's range (110..398), then eqn 1. The firmware's ``eqn1`` exactly."""
+    p = params or default_params()
+    return joystick_to_pot_byte(min(max(int(adc), p.joystick_min), p.joystick_max), p)
+
+
 def turn_value(angle_deg: float, params: ChairParams | None = None) -> float:
     """Eqn 2: the LR pot-scale value for a turn of ``angle_deg`` degrees.
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 
+from abcwc.control.pots import clamp_pot_byte
 from abcwc.params import ChairParams, default_params
 from abcwc.types import PotCommand, Twist
 
@@ -47,8 +48,14 @@ def twist_to_pot_bytes_int(
     lr = p.pot_neutral - int(math.copysign(1, w_mrad_s)) * _axis_offset(
         int(w_mrad_s), w_full, span, p.pot_dead_band
     )
-    clamp = lambda b: min(max(b, p.pot_safe_min), p.pot_safe_max)  # noqa: E731
-    return clamp(fb), clamp(lr)
+    return clamp_pot_byte(fb, p), clamp_pot_byte(lr, p)
+
+
+def twist_to_wire_units(twist: Twist) -> tuple[int, int]:
+    """A twist quantised as it goes over the wire: whole mm/s and mrad/s, int16."""
+    v_mm = max(-32767, min(32767, round(twist.v * 1000)))
+    w_mrad = max(-32767, min(32767, round(twist.w * 1000)))
+    return v_mm, w_mrad
 
 
 def twist_to_pot_command(twist: Twist, params: ChairParams | None = None) -> PotCommand:
@@ -58,9 +65,7 @@ def twist_to_pot_command(twist: Twist, params: ChairParams | None = None) -> Pot
     firmware) and mapped by :func:`twist_to_pot_bytes_int`. Speeds beyond the chair's
     limits saturate at full deflection.
     """
-    v_mm = max(-32767, min(32767, round(twist.v * 1000)))
-    w_mrad = max(-32767, min(32767, round(twist.w * 1000)))
-    return PotCommand(*twist_to_pot_bytes_int(v_mm, w_mrad, params))
+    return PotCommand(*twist_to_pot_bytes_int(*twist_to_wire_units(twist), params))
 
 
 def thesis_twist_to_pots(twist: Twist, params: ChairParams | None = None) -> PotCommand:

@@ -40,7 +40,7 @@ import numpy as np
 
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
-from abcwc.types import Pose2D, SensorFrame, wrap_angle
+from abcwc.types import Pose2D, SensorFrame, wrap_angle, wrap_tick_delta
 
 Method = Literal["euler", "midpoint", "exact"]
 METHODS: tuple[str, ...] = ("euler", "midpoint", "exact")
@@ -49,24 +49,6 @@ METHODS: tuple[str, ...] = ("euler", "midpoint", "exact")
 def _check_method(method: str) -> None:
     if method not in METHODS:
         raise ValueError(f"odometry method {method!r} unknown; allowed: {', '.join(METHODS)}")
-
-
-def wrap_tick_delta(delta: int | np.ndarray, bits: int = 32) -> int | np.ndarray:
-    """Difference of two cumulative counts, corrected for wrap-around at ``bits`` width.
-
-    The firmware keeps counts in a signed ``bits``-bit integer, which wraps from
-    ``2**(bits-1) - 1`` to ``-2**(bits-1)``. Any true increment smaller than half the
-    range in magnitude comes back right: the difference is taken modulo ``2**bits``
-    into ``[-2**(bits-1), 2**(bits-1))``.
-    """
-    if not isinstance(bits, int) or not 2 <= bits <= 64:
-        raise ValueError(f"bits must be an integer 2..64, got {bits!r}")
-    span = 1 << bits
-    half = 1 << (bits - 1)
-    if isinstance(delta, np.ndarray):
-        d = delta.astype(object) if bits == 64 else delta.astype(np.int64)
-        return ((d + half) % span - half).astype(np.int64)
-    return (int(delta) + half) % span - half
 
 
 def encoder_ticks_to_wheel_distance(

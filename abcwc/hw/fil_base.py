@@ -33,7 +33,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from abcwc.hw import protocol as P
-from abcwc.hw.serial_base import ChairLinkError, SerialBase, _check_cap
+from abcwc.hw.serial_base import ChairLinkError, SerialBase
 from abcwc.params import ChairParams
 from abcwc.sim.base import SimBase
 from abcwc.sim.motor import ChairErrors
@@ -155,7 +155,7 @@ class FirmwareInLoopBase(SerialBase):
             self._serial = self._open_port(self.port_name, self.baudrate)
             self.hello = self._wait_ready()
             if speed_cap is not None:
-                self.set_speed_cap(_check_cap(speed_cap))
+                self.set_speed_cap(speed_cap)
             self._push_inputs(self.sim.frame.gyro_z)
             self._frame = self._merge(self._frame_from(self._period_telemetry()))
         except BaseException:

@@ -10,9 +10,10 @@ version..payload and is sent little-endian. On the wire each frame is
 COBS-encoded (Cheshire & Baker, 1999) and followed by one ``0x00`` delimiter.
 All multi-byte fields are little-endian. The link runs at 115200 baud, 8N1.
 
-This module also holds the integer velocity controller that the firmware runs
-(``twist_to_pot_bytes_int``) and the thesis's joystick-to-pot map (eqn 1), so
-that the simulator and the chair turn a twist into exactly the same pot bytes.
+The pot maps and the integer velocity controller that the firmware runs live in
+:mod:`abcwc.control` (``twist_to_pot_bytes_int``, ``joystick_adc_to_pot_byte``,
+``cap_pot_byte``), so the simulator and the chair turn a twist into exactly the
+same pot bytes; ``tests/firmware`` checks them against the C core.
 
 Example::
 
@@ -29,6 +30,9 @@ import struct
 from dataclasses import dataclass, fields
 from typing import ClassVar
 
+from abcwc.params import default_params
+from abcwc.types import wrap_tick_delta
+
 __all__ = [
     "PROTOCOL_VERSION",
     "BAUD_RATE",
@@ -36,24 +40,10 @@ __all__ = [
     "Flag",
     "HelloReason",
     "POT_NEUTRAL",
-    "POT_MIN",
-    "POT_MAX",
     "JOY_CENTRE",
-    "JOY_MIN",
-    "JOY_MAX",
-    "JOY_DEAD_LO",
-    "JOY_DEAD_HI",
-    "JOY_FAULT_LO",
-    "JOY_FAULT_HI",
-    "V_MAX_MM_S",
-    "W_MAX_MRAD_S",
-    "MOTOR_DEAD_BAND",
-    "POT_SPAN",
     "POT_MAX_OFFSET",
-    "WATCHDOG_TIMEOUT_MS",
     "TELEMETRY_PERIOD_MS",
     "GYRO_LSB_PER_DEG_S",
-    "ENC_COUNTS_PER_ENCODER_TURN",
     "Heartbeat",
     "SetPots",
     "SetTwist",
@@ -70,55 +60,25 @@ __all__ = [
     "encode",
     "decode_frame",
     "FrameDecoder",
-    "pot_clamp",
-    "joystick_to_pot",
-    "joystick_state",
-    "axis_offset",
-    "twist_to_pot_bytes_int",
-    "apply_speed_cap",
     "tick_delta",
 ]
 
 PROTOCOL_VERSION = 1
 BAUD_RATE = 115200
 
-# --- pot and joystick scales (firmware/core/pots.h) ---------------------------
-POT_NEUTRAL = 128
+# --- defaults and scales the messages carry (the chair's own numbers: data/chair.toml;
+# the pot maps and the velocity controller are abcwc.control's, shared with the firmware)
+_CHAIR = default_params()
+POT_NEUTRAL = _CHAIR.pot_neutral
 """Pot byte for no motion on either channel."""
-POT_MIN = 8
-"""Lowest pot byte ever written: eqn 1 of JOY_MIN."""
-POT_MAX = 253
-"""Highest pot byte ever written: eqn 1 of JOY_MAX."""
-JOY_CENTRE = 254
+POT_MAX_OFFSET = _CHAIR.pot_full_scale_offset
+"""Largest |pot byte - 128|: a speed cap of this many bytes is no cap."""
+JOY_CENTRE = _CHAIR.joystick_centre
 """Joystick ADC reading at rest, on the thesis's "pot scale"."""
-JOY_MIN = 110
-JOY_MAX = 398
-JOY_DEAD_LO = 248
-"""A joystick channel inside JOY_DEAD_LO..JOY_DEAD_HI (inclusive) is neutral."""
-JOY_DEAD_HI = 260
-JOY_FAULT_LO = 60
-"""Joystick readings below this or above JOY_FAULT_HI mean a wiring fault."""
-JOY_FAULT_HI = 450
-
-# --- velocity controller (thesis table 2, eqn 2, appendix A.14) -------------------
-V_MAX_MM_S = 1667
-"""Full forward speed, mm/s (6 km/h, thesis table 2)."""
-W_MAX_MRAD_S = 1571
-"""Full turn rate, mrad/s (90 deg/s)."""
-MOTOR_DEAD_BAND = 2
-"""The motor controller ignores |byte - 128| <= 2."""
-POT_SPAN = 123
-"""Offsets 3..125 from neutral cover zero to full speed."""
-POT_MAX_OFFSET = 125
-
-WATCHDOG_TIMEOUT_MS = 250
-"""The chair drops a held command after this long without a valid frame, ms."""
-TELEMETRY_PERIOD_MS = 20
+TELEMETRY_PERIOD_MS = round(_CHAIR.control_period * 1000)
 """Default telemetry period, ms (50 Hz)."""
 GYRO_LSB_PER_DEG_S = 65.5
 """MPU9250 gyro scale at +-500 deg/s: raw counts per deg/s."""
-ENC_COUNTS_PER_ENCODER_TURN = 400
-"""Counts per turn of an encoder wheel (x1 decoding)."""
 
 
 class MsgType:
@@ -513,75 +473,11 @@ class FrameDecoder:
         return out
 
 
-# --- pot maps and the velocity controller (firmware/core/pots.c) ---------------------
-
-
-def pot_clamp(value: int) -> int:
-    """Clamp an integer into the safe pot range POT_MIN..POT_MAX (8..253)."""
-    return min(max(int(value), POT_MIN), POT_MAX)
-
-
-def joystick_to_pot(adc: int) -> int:
-    """Thesis eqn 1 in integers: ``(adc - 100) * 85 // 100`` after clamping the
-    reading into 110..398, so 110 -> 8, 254 -> 130, 398 -> 253."""
-    a = min(max(int(adc), JOY_MIN), JOY_MAX)
-    return pot_clamp((a - 100) * 85 // 100)
-
-
-def joystick_state(fb_adc: int, lr_adc: int) -> str:
-    """``"fault"`` if a reading is outside 60..450, else ``"deflected"`` if a
-    channel is outside the dead band 248..260, else ``"neutral"``."""
-    readings = (fb_adc, lr_adc)
-    if any(r < JOY_FAULT_LO or r > JOY_FAULT_HI for r in readings):
-        return "fault"
-    if any(r < JOY_DEAD_LO or r > JOY_DEAD_HI for r in readings):
-        return "deflected"
-    return "neutral"
-
-
-def axis_offset(value: int, max_value: int) -> int:
-    """Pot offset for one axis: 0 for standstill, else 3..125 (more beyond
-    ``max_value``); ``round(|value| * 123 / max_value)`` in integers, plus the
-    motor controller's dead band of 2."""
-    if value == 0 or max_value <= 0:
-        return 0
-    mag = (min(abs(int(value)), 1_000_000) * POT_SPAN + max_value // 2) // max_value
-    return 0 if mag == 0 else MOTOR_DEAD_BAND + mag
-
-
-def twist_to_pot_bytes_int(v_mm_s: int, w_mrad_s: int) -> tuple[int, int]:
-    """The chair's calibrated velocity controller, bit for bit as in the firmware.
-
-    Args:
-        v_mm_s: linear speed, mm/s, + forward (int16 on the wire).
-        w_mrad_s: turn rate, mrad/s, + counter-clockwise / left (ROS REP 103).
-
-    Returns:
-        ``(fb, lr)`` pot bytes in 8..253: FB above 128 drives forward, LR below
-        128 turns left. 1667 mm/s (6 km/h) and 1571 mrad/s (90 deg/s) are full
-        scale (thesis table 2, eqn 2, appendix A.14).
-    """
-    v, w = int(v_mm_s), int(w_mrad_s)
-    fb_off = axis_offset(v, V_MAX_MM_S)
-    lr_off = axis_offset(w, W_MAX_MRAD_S)
-    if v < 0:
-        fb_off = -fb_off
-    if w < 0:
-        lr_off = -lr_off
-    return pot_clamp(POT_NEUTRAL + fb_off), pot_clamp(POT_NEUTRAL - lr_off)
-
-
-def apply_speed_cap(byte: int, cap: int) -> int:
-    """Limit a host pot byte to ``|byte - 128| <= cap`` (cap above 125 means 125)
-    and into 8..253, as the chair does with the CONFIGURE caps."""
-    c = min(int(cap), POT_MAX_OFFSET)
-    off = min(max(int(byte) - POT_NEUTRAL, -c), c)
-    return pot_clamp(POT_NEUTRAL + off)
+# --- counters ------------------------------------------------------------------------
 
 
 def tick_delta(now: int, before: int) -> int:
     """Signed difference of two wrapping 32-bit encoder counts (or chair
     times), correct across a wrap: ``tick_delta(5, -2) == 7`` and
     ``tick_delta(0, 2**32 - 1) == 1``."""
-    d = (int(now) - int(before)) & 0xFFFFFFFF
-    return d - (1 << 32) if d & 0x80000000 else d
+    return wrap_tick_delta(int(now) - int(before), bits=32)

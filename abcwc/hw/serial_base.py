@@ -35,7 +35,8 @@ from collections import deque
 import numpy as np
 
 from abcwc.base import Controller, run_controller
-from abcwc.control.velocity import twist_to_pot_command
+from abcwc.control.interface_board import check_speed_cap
+from abcwc.control.velocity import twist_to_pot_command, twist_to_wire_units
 from abcwc.hw import protocol as P
 from abcwc.log import RunLog
 from abcwc.types import PotCommand, SensorFrame, StatusFlags, Twist
@@ -110,22 +111,13 @@ def default_speed_cap() -> int:
     except ValueError:
         raise ValueError(f"{SPEED_CAP_ENV}={raw!r}: expected an integer 0..125 "
                          f"(pot bytes from 128)") from None
-    return _check_cap(value)
-
-
-def _check_cap(offset: object) -> int:
-    if isinstance(offset, bool) or not isinstance(offset, (int, np.integer)) \
-            or not 0 <= int(offset) <= P.POT_MAX_OFFSET:
-        raise ValueError(f"speed cap {offset!r} outside 0..{P.POT_MAX_OFFSET} "
-                         f"(pot bytes from 128)")
-    return int(offset)
+    return check_speed_cap(value)
 
 
 def _command_message(command: PotCommand | Twist) -> tuple[type, dict, PotCommand]:
     """The wire message for a command and the pot bytes it asks for."""
     if isinstance(command, Twist):
-        v = max(-32767, min(32767, round(command.v * 1000)))
-        w = max(-32767, min(32767, round(command.w * 1000)))
+        v, w = twist_to_wire_units(command)
         return P.SetTwist, {"v_mm_s": v, "w_mrad_s": w}, twist_to_pot_command(command)
     if isinstance(command, PotCommand):
         return P.SetPots, {"fb": command.fb, "lr": command.lr}, command
@@ -171,7 +163,7 @@ class SerialBase:
         self.ready_timeout = float(ready_timeout)
         self.period = PERIOD
         self._init_state()
-        cap = default_speed_cap() if speed_cap is None else _check_cap(speed_cap)
+        cap = default_speed_cap() if speed_cap is None else check_speed_cap(speed_cap)
         self._serial = self._open_port(self.port_name, baudrate)
         try:
             self.hello = self._wait_ready()
@@ -395,7 +387,7 @@ class SerialBase:
 
     def set_speed_cap(self, offset: int) -> None:
         """Limit host commands to 128 +- ``offset`` pot bytes (CONFIGURE, at once)."""
-        offset = _check_cap(offset)
+        offset = check_speed_cap(offset)
         self._write_msg(P.Configure, cap_fb=offset, cap_lr=offset, telemetry_period_ms=0)
         self.speed_cap = offset
 

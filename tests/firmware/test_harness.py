@@ -10,6 +10,7 @@ import time
 import pytest
 from firmware_helpers import Harness, make, random_bytes, require_tools
 
+from abcwc.control import joystick_adc_to_pot_byte, twist_to_pot_bytes_int
 from abcwc.hw import protocol as P
 
 LOOP_MS = 1.5
@@ -54,7 +55,7 @@ def test_twist_parity_sweep(chair):
     for v, w in cases:
         chair.send(P.SetTwist, v_mm_s=v, w_mrad_s=w)
         chair.advance(4)
-        assert chair.pots() == P.twist_to_pot_bytes_int(v, w), (v, w)
+        assert chair.pots() == twist_to_pot_bytes_int(v, w), (v, w)
     chair.advance(25)
     tel = chair.telemetry()[-1]
     assert tel.flags & P.Flag.HOST_ACTIVE
@@ -81,7 +82,7 @@ def test_watchdog_neutral_after_250_ms(chair):
     for _ in range(5):  # heartbeats keep it alive
         chair.send(P.Heartbeat)
         chair.advance(100)
-    assert chair.pots() == P.twist_to_pot_bytes_int(1000, -500)
+    assert chair.pots() == twist_to_pot_bytes_int(1000, -500)
     chair.pot_log()
     chair.send(P.Heartbeat)
     t_last = chair.now_us()
@@ -98,7 +99,7 @@ def test_watchdog_neutral_after_250_ms(chair):
     assert chair.pots() == (128, 128)
     chair.send(P.SetTwist, v_mm_s=500, w_mrad_s=0)
     chair.advance(30)
-    assert chair.pots() == P.twist_to_pot_bytes_int(500, 0)
+    assert chair.pots() == twist_to_pot_bytes_int(500, 0)
     assert not chair.telemetry()[-1].flags & P.Flag.WATCHDOG_TRIPPED
 
 
@@ -111,7 +112,7 @@ def test_joystick_wins_within_one_loop(chair):
     t0 = chair.now_us()
     chair.advance(5)
     log = chair.pot_log()
-    want = (P.joystick_to_pot(398), P.joystick_to_pot(200))
+    want = (joystick_adc_to_pot_byte(398), joystick_adc_to_pot_byte(200))
     assert chair.pots() == want
     assert log and max(t for t, _, _ in log) - t0 <= LOOP_MS * 1000, log
     # Host commands are ignored while the joystick is held ...
@@ -128,7 +129,7 @@ def test_joystick_wins_within_one_loop(chair):
     assert chair.pots() == (128, 128)
     chair.send(P.SetTwist, v_mm_s=300, w_mrad_s=0)
     chair.advance(10)
-    assert chair.pots() == P.twist_to_pot_bytes_int(300, 0)
+    assert chair.pots() == twist_to_pot_bytes_int(300, 0)
     # A disconnected joystick (reads near 0): neutral, flagged.
     chair.cmd("J 3 254")
     chair.advance(25)
@@ -167,7 +168,7 @@ def test_garbage_is_counted_and_harmless(chair):
     # Still alive and obeying.
     chair.send(P.SetTwist, v_mm_s=800, w_mrad_s=100)
     chair.advance(10)
-    assert chair.pots() == P.twist_to_pot_bytes_int(800, 100)
+    assert chair.pots() == twist_to_pot_bytes_int(800, 100)
     assert 8 <= min(chair.pots()) and max(chair.pots()) <= 253
 
 

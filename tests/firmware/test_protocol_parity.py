@@ -10,6 +10,7 @@ from dataclasses import fields
 import pytest
 from firmware_helpers import PROTO_TOOL, make, random_bytes, require_tools
 
+from abcwc.control import cap_pot_byte, joystick_adc_to_pot_byte, twist_to_pot_bytes_int
 from abcwc.hw import protocol as P
 
 # ---------------------------------------------------------------- pure Python
@@ -58,7 +59,7 @@ def test_field_range_errors():
 
 
 def test_velocity_controller_reference_points():
-    f = P.twist_to_pot_bytes_int
+    f = twist_to_pot_bytes_int
     assert f(0, 0) == (128, 128)
     assert f(1667, 0) == (253, 128)
     assert f(-1667, 0) == (8, 128)
@@ -66,9 +67,9 @@ def test_velocity_controller_reference_points():
     assert f(0, -1571) == (128, 253)
     assert f(6, 0) == (128, 128)
     assert f(7, 0) == (131, 128)
-    assert P.joystick_to_pot(110) == 8
-    assert P.joystick_to_pot(254) == 130
-    assert P.joystick_to_pot(398) == 253
+    assert joystick_adc_to_pot_byte(110) == 8
+    assert joystick_adc_to_pot_byte(254) == 130
+    assert joystick_adc_to_pot_byte(398) == 253
     assert P.tick_delta(5, 2**32 - 2) == 7
     assert P.tick_delta(2**32 - 2, 5) == -7
 
@@ -125,15 +126,15 @@ def test_velocity_controller_matches_c(tool):
     cases += [(-32768, 32767), (32767, -32768), (1667, 1571), (-1667, -1571)]
     answers = tool.ask([f"twist {v} {w}" for v, w in cases])
     for (v, w), ans in zip(cases, answers, strict=True):
-        assert tuple(map(int, ans.split())) == P.twist_to_pot_bytes_int(v, w), (v, w)
+        assert tuple(map(int, ans.split())) == twist_to_pot_bytes_int(v, w), (v, w)
 
 
 def test_eqn1_and_cap_match_c(tool):
     answers = tool.ask([f"joy {a}" for a in range(0, 1024)])
-    assert [int(a) for a in answers] == [P.joystick_to_pot(a) for a in range(0, 1024)]
+    assert [int(a) for a in answers] == [joystick_adc_to_pot_byte(a) for a in range(0, 1024)]
     cases = [(b, c) for b in range(0, 256, 3) for c in (0, 1, 10, 60, 125, 126, 255)]
     answers = tool.ask([f"cap {b} {c}" for b, c in cases])
-    assert [int(a) for a in answers] == [P.apply_speed_cap(b, c) for b, c in cases]
+    assert [int(a) for a in answers] == [cap_pot_byte(b, c) for b, c in cases]
 
 
 def _random_message(rng: random.Random):

@@ -14,7 +14,16 @@ size_t cobs_encode(const uint8_t *src, size_t len, uint8_t *dst, size_t cap)
         return 0;
     }
     for (i = 0; i < len; i++) {
-        if (src[i] == 0u) {
+        if (src[i] != 0u) {
+            if (out >= cap) {
+                return 0;
+            }
+            dst[out++] = src[i];
+            code++;
+        }
+        /* A zero ends its group. So does a full group (254 data bytes), which
+         * carries no implied zero: open a new group only if more data follows. */
+        if (src[i] == 0u || (code == 0xFFu && i + 1u < len)) {
             dst[code_pos] = code;
             code_pos = out;
             if (out >= cap) {
@@ -22,23 +31,6 @@ size_t cobs_encode(const uint8_t *src, size_t len, uint8_t *dst, size_t cap)
             }
             out++;
             code = 1;
-        } else {
-            if (out >= cap) {
-                return 0;
-            }
-            dst[out++] = src[i];
-            code++;
-            /* A full group (254 data bytes) ends without an implied zero;
-             * open a new group only if more data follows. */
-            if (code == 0xFFu && i + 1u < len) {
-                dst[code_pos] = code;
-                code_pos = out;
-                if (out >= cap) {
-                    return 0;
-                }
-                out++;
-                code = 1;
-            }
         }
     }
     dst[code_pos] = code;

@@ -332,19 +332,16 @@ def cobs_encode(data: bytes) -> bytes:
     code = 1
     n = len(data)
     for i, byte in enumerate(data):
-        if byte == 0:
+        if byte != 0:
+            out.append(byte)
+            code += 1
+        # a zero ends its group; so does a full group (254 data bytes), which carries
+        # no implied zero: open a new group only if more data follows
+        if byte == 0 or (code == 0xFF and i + 1 < n):
             out[code_pos] = code
             code_pos = len(out)
             out.append(0)
             code = 1
-        else:
-            out.append(byte)
-            code += 1
-            if code == 0xFF and i + 1 < n:
-                out[code_pos] = code
-                code_pos = len(out)
-                out.append(0)
-                code = 1
     out[code_pos] = code
     return bytes(out)
 

@@ -23,12 +23,16 @@ def noise_free(params: ChairParams | None = None) -> ChairParams:
     )
 
 
-def box_world(width: float = 40.0, height: float = 40.0, extra: list | None = None) -> World:
-    """An empty rectangular room from (0, 0) to (width, height), start in the middle."""
-    walls = [[[0, 0], [width, 0], [width, height], [0, height], [0, 0]]] + (extra or [])
+def box_world(width: float = 40.0, height: float = 40.0, extra: list | None = None,
+              centred: bool = False) -> World:
+    """An empty rectangular room from (0, 0) to (width, height), start in the middle
+    facing +x; ``centred`` puts the room's middle (and the start) at the origin."""
+    x0, y0 = (-width / 2, -height / 2) if centred else (0.0, 0.0)
+    x1, y1 = x0 + width, y0 + height
+    walls = [[[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]]] + (extra or [])
     return world_from_dict({
         "name": "box", "walls": walls,
-        "places": {"start": [width / 2, height / 2, 0.0]},
+        "places": {"start": [(x0 + x1) / 2, (y0 + y1) / 2, 0.0]},
     })
 
 

@@ -22,11 +22,10 @@ from abcwc.estimation import (
 )
 from abcwc.estimation.bench import bench_ekf
 from abcwc.sim.base import SimBase
-from abcwc.sim.world import world_from_dict
 from abcwc.types import Pose2D, Twist
+from tests.conftest import box_world
 
-OPEN = world_from_dict({"name": "open", "places": {"start": [0, 0, 0]},
-                        "walls": [[[-10, -10], [10, -10], [10, 10], [-10, 10], [-10, -10]]]})
+OPEN = box_world(20, 20, centred=True)
 FIX_STD = (0.05, 0.05, 0.02)  # m, m, rad: an occasional landmark sighting
 # Up and down the floor world's corridor (y 8..10 m), weaving a little
 CORRIDOR = [(8, 8.8), (14, 9.3), (20, 8.7), (26, 9.3), (32, 8.8), (37, 9.0),

@@ -17,11 +17,10 @@ from abcwc.estimation import (
 from abcwc.estimation.gyro import gyro_odometry_from_log
 from abcwc.params import default_params
 from abcwc.sim.base import SimBase
-from abcwc.sim.world import world_from_dict
 from abcwc.types import Pose2D, Twist
+from tests.conftest import box_world
 
-OPEN = world_from_dict({"name": "open", "places": {"start": [0, 0, 0]},
-                        "walls": [[[-60, -60], [60, -60], [60, 60], [-60, 60], [-60, -60]]]})
+OPEN = box_world(120, 120, centred=True)
 
 
 @pytest.fixture(scope="module")

@@ -16,10 +16,9 @@ from abcwc.estimation.umbmark import (
 )
 from abcwc.sim.base import SimBase
 from abcwc.sim.motor import ChairErrors
-from abcwc.sim.world import world_from_dict
+from tests.conftest import box_world
 
-OPEN = world_from_dict({"name": "open", "places": {"start": [0, 0, 0]},
-                        "walls": [[[-10, -10], [10, -10], [10, 10], [-10, 10], [-10, -10]]]})
+OPEN = box_world(20, 20, centred=True)
 
 
 def test_formulas_recover_a_hand_worked_case():

@@ -1,10 +1,11 @@
 """abcwc: turn a powered wheelchair into an autonomous robot.
 
 ``chair = abcwc.connect()`` gives the simulated chair; ``abcwc.connect("/dev/ttyACM0")``
-(or with ``ABCWC_PORT`` set) the real one, through the same interface.
+the real one, through the same interface; ``with abcwc.hardware_chair() as real:`` is a
+course cell's speed-capped real chair (``ABCWC_PORT``), or ``None`` when there is none.
 """
 
-from abcwc.base import connect
+from abcwc.base import connect, hardware_chair
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.types import LaserScan, Pose2D, PotCommand, SensorFrame, StatusFlags, Twist
@@ -21,5 +22,6 @@ __all__ = [
     "StatusFlags",
     "Twist",
     "connect",
+    "hardware_chair",
     "default_params",
 ]

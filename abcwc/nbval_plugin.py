@@ -13,7 +13,11 @@ in a fresh kernel, one test per code cell:
 
 Kernels start with a fixed environment: this checkout of ``abcwc`` first on the path,
 matplotlib's inline backend (non-interactive; figures still become image/png outputs),
-``PYTHONHASHSEED=0``, and no ``ABCWC_PORT``, so a test run never talks to a real chair.
+``PYTHONHASHSEED=0``, and ``ABCWC_PORT=simavr``: a test run never talks to a real chair,
+and every real-chair cell (:func:`abcwc.hardware_chair`) runs against our firmware on a
+simulated Arduino. Where the AVR toolchain and simavr are missing (outside CI),
+``ABCWC_PORT`` is removed instead and those cells say they are skipped; under CI
+(``CI=true``) a missing toolchain fails them.
 """
 
 from __future__ import annotations
@@ -25,7 +29,16 @@ from pathlib import Path
 
 import pytest
 
+from abcwc.base import SIMAVR_PORT
 from abcwc.paths import REPO_ROOT as ROOT
+
+
+def firmware_in_loop_available() -> bool:
+    """Whether hardware cells can run on the firmware in simavr (always so under CI)."""
+    from abcwc.hw.fil_base import missing_tools
+
+    return os.environ.get("CI", "").lower() == "true" or not missing_tools()
+
 
 LAX_DIR = "course"  # under the pytest rootdir
 SANITIZE_FILE = "tests/nbval_sanitize.cfg"  # under the pytest rootdir
@@ -33,7 +46,8 @@ KERNEL_ENV = {
     "MPLBACKEND": "module://matplotlib_inline.backend_inline",
     "PYTHONHASHSEED": "0",
     "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
-    "ABCWC_PORT": None,  # None: removed from the kernel's environment
+    # None: removed from the kernel's environment
+    "ABCWC_PORT": SIMAVR_PORT if firmware_in_loop_available() else None,
 }
 
 try:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -148,3 +149,19 @@ def test_shipped_worlds_load_and_are_closed_enough():
             assert xmin < place.x < xmax and ymin < place.y < ymax
         chair = SimBase(world=name, errors="ideal")
         assert np.isfinite(chair.frame.sonar)
+
+
+def test_sonar_avoider_on_a_real_chairs_frames():
+    """The real chair's frames: IR NaN (not wired), sonar NaN with no echo. NaN sonar is
+    nothing in range (drive on); a near sonar echo still turns, to the right."""
+    from dataclasses import replace
+
+    from abcwc.control import twist_to_pot_command
+    from abcwc.navigation import SonarAvoider
+
+    sim = SimBase("lab", seed=0)
+    frame = replace(sim.frame, ir=np.full(6, np.nan), sonar=math.nan, pose=None)
+    avoider = SonarAvoider(cruise=0.3)
+    assert avoider(frame) == twist_to_pot_command(Twist(0.3, 0.0))
+    turn = avoider(replace(frame, sonar=0.6))
+    assert turn.lr > 128  # LR above 128 turns right

@@ -295,3 +295,87 @@ def test_fil_turn_90_degrees(fil):
     assert max(log.gyro_z) == pytest.approx(0.5, abs=0.1)
     assert log.meta["source"] == "firmware-in-the-loop"
     assert not (log.flags & StatusFlags.WATCHDOG_TRIPPED).any()
+
+
+def test_fil_joystick_overrides_the_host_and_never_resumes_by_itself(fil):
+    """The person on the chair wins: a joystick pull overrides a host that keeps
+    commanding forward, in the firmware's own loop, and the chair drives as the
+    joystick says; released, the pots go neutral until the host sends again."""
+    from abcwc.control import joystick_adc_to_pot_byte
+
+    fil.send(Twist(0.5, 0.0))
+    fil.run(lambda f: Twist(0.5, 0.0), 2.0)
+    assert fil.sim.chair.velocity.length > 0.4  # driving forward at the host's 0.5 m/s
+    fil.set_joystick(fb=170)                    # pulled back (centre 254)
+    reverse = joystick_adc_to_pot_byte(170)
+    log = fil.run(lambda f: Twist(0.5, 0.0), 3.0)
+    override = (log.flags & StatusFlags.JOYSTICK_OVERRIDE) != 0
+    assert override.all(), "the override must show in every frame from the first period"
+    centre = joystick_adc_to_pot_byte(254)  # eqn 1: 130, inside the dead band
+    assert (log.pots[:, 0] == reverse).all() and (log.pots[:, 1] == centre).all()
+    heading = fil.pose.theta
+    forward = (math.cos(heading), math.sin(heading))
+    speed = fil.sim.chair.velocity.dot(forward)
+    assert reverse < 128 and speed < -0.3, speed  # the chair now backs up
+    # Released: neutral at once; the host's next command is a new one and drives again.
+    fil.release_joystick()
+    frame = fil.step()
+    assert not frame.flags & StatusFlags.JOYSTICK_OVERRIDE
+    assert (frame.pot_fb, frame.pot_lr) == (128, 128)
+    fil.send(Twist(0.3, 0.0))
+    frame = fil.step()
+    want = twist_to_pot_command(Twist(0.3, 0.0))
+    assert (frame.pot_fb, frame.pot_lr) == (want.fb, want.lr)
+
+
+# ------------------------------------------------------------------ hardware cells
+def test_hardware_chair_unset_is_skipped_with_a_message(monkeypatch, capsys):
+    from abcwc import hardware_chair
+
+    monkeypatch.delenv("ABCWC_PORT", raising=False)
+    with hardware_chair(speed_cap=20, world="lab") as real:
+        assert real is None
+    assert "ABCWC_PORT is not set: skipping" in capsys.readouterr().out
+    with pytest.raises(ValueError, match="0..125"), hardware_chair(speed_cap=200):
+        pass
+
+
+def test_simulator_options_never_reach_a_real_port(monkeypatch):
+    """With ABCWC_PORT set, a simulator cell (options given) stays in the simulator;
+    connect() with no arguments goes to the port."""
+    from abcwc.sim.base import SimBase
+
+    monkeypatch.setenv("ABCWC_PORT", "/dev/abcwc-no-such-port")
+    assert isinstance(connect(world="lab", seed=1), SimBase)
+    with pytest.raises(NoSuchPortError, match="abcwc-no-such-port"):
+        connect()
+
+
+def test_hardware_chair_on_the_firmware_in_simavr(harness_files, monkeypatch, capsys):
+    """ABCWC_PORT=simavr: the real firmware drives the simulated chair, capped; the
+    chair is stopped and the harness ended when the block is left, even by an error."""
+    from abcwc import Pose2D, hardware_chair
+    from abcwc.hw.fil_base import FirmwareInLoopBase
+
+    monkeypatch.setenv("ABCWC_PORT", "simavr")
+    start = Pose2D(3.0, 4.0, 0.0)
+    with pytest.raises(RuntimeError, match="cell failed"):
+        with hardware_chair(speed_cap=20, world="lab", start=start, people=False) as real:
+            assert isinstance(real, FirmwareInLoopBase)
+            log = real.drive(PotCommand(253, 128), seconds=2.0)
+            raise RuntimeError("cell failed")
+    assert "simavr" in capsys.readouterr().out
+    assert real._proc is None and real._closed  # harness gone, link closed
+    assert (log.pots[:, 0] <= 148).all() and log.pots[-1, 0] == 148  # 128 + cap
+    assert (log.flags[-1] & StatusFlags.SPEED_CAPPED)
+    moved = log.pose[-1, 0] - start.x
+    cap_speed = 20 / 125 * real.params.max_speed
+    assert 0.5 * cap_speed * 2.0 < moved < cap_speed * 2.0, moved
+
+
+def test_notebook_kernels_run_hardware_cells_on_the_firmware(harness_files):
+    """With the toolchain present (always under CI), nbval's kernels get
+    ABCWC_PORT=simavr, so every real-chair cell runs the real firmware in simavr."""
+    from abcwc.nbval_plugin import KERNEL_ENV
+
+    assert KERNEL_ENV["ABCWC_PORT"] == "simavr"

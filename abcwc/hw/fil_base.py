@@ -40,7 +40,8 @@ from abcwc.sim.motor import ChairErrors
 from abcwc.sim.world import World
 from abcwc.types import Pose2D, PotCommand, SensorFrame
 
-__all__ = ["FirmwareInLoopBase", "FirmwareToolchainError", "build_harness", "FIRMWARE_DIR"]
+__all__ = ["FirmwareInLoopBase", "FirmwareToolchainError", "build_harness", "missing_tools",
+           "FIRMWARE_DIR"]
 
 FIRMWARE_DIR = Path(__file__).resolve().parents[2] / "firmware"
 """The firmware sources (present in a repository checkout)."""
@@ -60,6 +61,16 @@ class FirmwareToolchainError(RuntimeError):
     """The AVR toolchain or simavr is missing, or the harness did not build."""
 
 
+def missing_tools() -> list[str]:
+    """The tools the firmware in the loop needs that this machine lacks (empty: all there)."""
+    missing = [t for t in ("make", "gcc", "avr-gcc") if shutil.which(t) is None]
+    if not ARDUINO_CORE.is_dir():
+        missing.append("arduino-core-avr")
+    if not SIMAVR_HEADER.exists():
+        missing.append("libsimavr-dev")
+    return missing
+
+
 def build_harness(firmware_dir: Path = FIRMWARE_DIR) -> tuple[Path, Path]:
     """Build (if needed) and return ``(harness, elf)``.
 
@@ -72,11 +83,7 @@ def build_harness(firmware_dir: Path = FIRMWARE_DIR) -> tuple[Path, Path]:
         raise FirmwareToolchainError(
             f"firmware sources not found at {firmware_dir}: the firmware in the loop "
             f"needs a checkout of the abcwc repository")
-    missing = [t for t in ("make", "gcc", "avr-gcc") if shutil.which(t) is None]
-    if not ARDUINO_CORE.is_dir():
-        missing.append("arduino-core-avr")
-    if not SIMAVR_HEADER.exists():
-        missing.append("libsimavr-dev")
+    missing = missing_tools()
     if missing:
         pkgs = " ".join(sorted({TOOL_PACKAGES[m] for m in missing}))
         raise FirmwareToolchainError(

@@ -10,6 +10,10 @@ version off the walls where the thesis's would not be:
 * the turn goes to the side with more room (the IR sensors at +-60 degrees), held
   until the way is clear, instead of always the same way;
 * the turn speed falls with the distance, so the chair turns on the spot at 0.3 m.
+
+On the real chair the IR ring is not wired to the firmware (its readings are NaN) and
+the sonar reads NaN while it hears no echo: the avoider then runs on the sonar alone,
+turning right like the thesis's, and NaN sonar counts as nothing in range.
 """
 
 from __future__ import annotations
@@ -63,7 +67,9 @@ class SonarAvoider:
             self.last_action = AvoidAction.REVERSE
             return twist_to_pot_command(
                 Twist(-0.3, self._turn_sign * 0.6), self.params)
-        decision = sonar_turn_angle(frame.sonar)
+        # NaN: the real chair's sonar heard no echo, so nothing is within its range
+        sonar = frame.sonar if math.isfinite(frame.sonar) else self.params.sonar.max_range
+        decision = sonar_turn_angle(sonar)
         if decision.action is AvoidAction.FORWARD:
             self._turning = False
             self.last_action = AvoidAction.FORWARD
@@ -73,7 +79,7 @@ class SonarAvoider:
             self._turn_sign = self._freer_side(frame)
         # table 7's angle -> LR byte by eqn 2 and eqn 1; slower the nearer it is
         lr = angle_to_lr_byte(self._turn_sign * decision.angle_deg, self.params)
-        closeness = (1.0 - frame.sonar) / 0.7  # 0 at 1 m, 1 at 0.3 m
+        closeness = (1.0 - sonar) / 0.7  # 0 at 1 m, 1 at 0.3 m
         speed = self.slow * max(0.0, 1.0 - closeness)
         fb = twist_to_pot_command(Twist(speed, 0.0), self.params).fb
         self.last_action = AvoidAction.TURN

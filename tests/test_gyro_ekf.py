@@ -1,17 +1,27 @@
-"""Gyro fusion (thesis 4.2.4) and the EKF (4.3.5): bias, back ends agree, consistency."""
+"""Gyro fusion (thesis 4.2.4) and the EKF (4.3.5): bias, back ends agree, consistency.
+
+The acceptance figure, the average NEES over 50 seeded 5-minute drives, takes about two
+minutes, so CI runs 10 drives of 60 s against the 10-run band instead. Measured by hand
+with this set-up: 50 x 300 s gives 2.64, inside the 95 % band [2.36, 3.72] (the filter
+without a bias state gave 1.93 there: too cautious).
+"""
 
 import math
 
 import numpy as np
 import pytest
 
-from abcwc.behaviours import GoToLandmark
+from abcwc.behaviours import FollowWaypoints, GroundTruth, floor_mixed_drive
 from abcwc.estimation import (
     ChairEkf,
+    EkfNoise,
     absolute_fixes,
     calibrate_distance_scale,
+    e_max_syst,
     estimate_gyro_bias,
+    gyro_bias_prior,
     gyro_odometry_from_log,
+    kalman_update,
     nees,
     nees_band,
     noise_from_models,
@@ -21,42 +31,21 @@ from abcwc.estimation import (
     umbmark_corrections,
 )
 from abcwc.estimation.bench import bench_ekf
+from abcwc.estimation.ekf import BIAS, H_GYRO, motion, motion_jacobian
 from abcwc.sim.base import SimBase
-from abcwc.types import Pose2D, Twist
+from abcwc.types import Pose2D, SensorFrame, Twist
 from tests.conftest import box_world
 
 OPEN = box_world(20, 20, centred=True)
 FIX_STD = (0.05, 0.05, 0.02)  # m, m, rad: an occasional landmark sighting
-# Up and down the floor world's corridor (y 8..10 m), weaving a little
-CORRIDOR = [(8, 8.8), (14, 9.3), (20, 8.7), (26, 9.3), (32, 8.8), (37, 9.0),
-            (30, 9.2), (24, 8.7), (18, 9.3), (12, 8.8), (3, 9.0)] * 6
-
-
-class _Truth:
-    def update_frame(self, frame):
-        return frame.pose
-
-
-class CorridorRoute:
-    """Waypoint following on ground truth (the estimators under test never see it)."""
-
-    def __init__(self):
-        self.index = 0
-        self.leg = GoToLandmark(CORRIDOR[0], _Truth(), tolerance=0.5, max_speed=0.9)
-
-    def __call__(self, frame):
-        command = self.leg(frame)
-        if self.leg.reached:
-            self.index += 1
-            self.leg = GoToLandmark(CORRIDOR[self.index], _Truth(), tolerance=0.5,
-                                    max_speed=0.9)
-            command = self.leg(frame)
-        return command
+FIX_EVERY = 10.0  # s
 
 
 @pytest.fixture(scope="module")
 def calibration():
-    """UMBmark (one square each way) plus a straight-line scale, on the worn chair."""
+    """UMBmark (one square each way) plus a straight-line scale, on the worn chair; then
+    the corrected squares again: what they still miss per metre sets the odometry's
+    residual relative error (``E_max,syst / 4 L``)."""
 
     def make(seed):
         return SimBase(OPEN, seed=seed, errors="worn", people=False)
@@ -64,25 +53,31 @@ def calibration():
     cw, ccw = run_umbmark(make, runs=1)
     result = umbmark_corrections(cw, ccw, 3.5, 0.44)
     scale = calibrate_distance_scale(make(99), correction=result.correction)
-    return (result.c_left * scale, result.c_right * scale), result.wheel_base * scale
+    correction = (result.c_left * scale, result.c_right * scale)
+    wheel_base = result.wheel_base * scale
+    cw, ccw = run_umbmark(make, runs=1, correction=correction, wheel_base=wheel_base)
+    return correction, wheel_base, e_max_syst(cw, ccw) / (4 * 3.5)
 
 
 def _drive(seed, seconds):
+    """Stand still 2 s (the bias prior), then the floor world's mixed drive."""
     sim = SimBase("floor", seed=seed, errors="worn", people=False)
-    bias = estimate_gyro_bias(sim.drive(Twist(0.0, 0.0), 2.0).gyro_z)
-    log = sim.run(CorridorRoute(), seconds)
+    prior = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), 2.0).gyro_z)
+    log = sim.run(FollowWaypoints(floor_mixed_drive()), seconds)
     assert log.collisions[-1] == 0
-    return log, bias
+    return sim, log, prior
 
 
-def _filter(log, bias, calibration, seconds, seed):
-    correction, wheel_base = calibration
+def _filter(log, prior, calibration, seed, **options):
+    correction, wheel_base, residual = calibration
     ekf = ChairEkf(Pose2D(*log.pose[0]), correction=correction, wheel_base=wheel_base,
-                   gyro_bias=bias, noise=noise_from_models(bias_hold=seconds))
-    fixes = absolute_fixes(log, 10.0, FIX_STD, seed=seed)
+                   gyro_bias=prior[0], gyro_bias_std=prior[1],
+                   noise=noise_from_models(residual_rel=residual), **options)
+    fixes = absolute_fixes(log, FIX_EVERY, FIX_STD, seed=seed)
     return run_ekf(log, ekf, fixes, np.diag(np.square(FIX_STD)))
 
 
+# --------------------------------------------------------------------- gyro
 def test_gyro_bias_from_standing_still():
     sim = SimBase(OPEN, seed=3, errors="worn", people=False)
     still = sim.drive(Twist(0.0, 0.0), 2.0)
@@ -91,6 +86,15 @@ def test_gyro_bias_from_standing_still():
         estimate_gyro_bias(np.array([0.0, 0.1, np.nan]))
     with pytest.raises(ValueError, match="at least one"):
         estimate_gyro_bias(np.array([]))
+
+
+def test_gyro_bias_prior_std_matches_the_spread_of_its_errors():
+    z = []
+    for seed in range(40):
+        sim = SimBase(OPEN, seed=seed, errors="worn", people=False)
+        bias, std = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), 2.0).gyro_z)
+        z.append((bias - sim.gyro.bias) / std)  # the sim's bias at the window's end
+    assert 0.6 < np.sqrt(np.mean(np.square(z))) < 1.4
 
 
 def test_gyro_heading_beats_a_wrong_wheel_base():
@@ -103,10 +107,35 @@ def test_gyro_heading_beats_a_wrong_wheel_base():
     assert np.abs(gyro - truth).max() < 0.5 * np.abs(wheel - truth).max()
 
 
+# --------------------------------------------------------------------- EKF algebra
+def test_motion_jacobian_matches_finite_differences():
+    s, dt, eps = np.array([1.0, -2.0, 2.5, 0.8, -0.3, 0.004]), 0.02, 1e-6
+    numeric = np.column_stack([(motion(s + eps * e, dt) - motion(s - eps * e, dt)) / (2 * eps)
+                               for e in np.eye(6)])
+    assert np.allclose(motion_jacobian(s, dt), numeric, atol=1e-9)
+    assert motion(s, dt)[BIAS] == s[BIAS]
+
+
+def test_kalman_update_equals_filterpy_and_the_closed_form():
+    from filterpy.kalman import update
+
+    rng = np.random.default_rng(4)
+    a = rng.normal(size=(6, 6))
+    p = a @ a.T + np.eye(6)
+    x, z, r = rng.normal(size=6), np.array([0.3]), np.array([[0.02]])
+    x1, p1 = kalman_update(x, p, z, np.asarray(H_GYRO), r)
+    x2, p2 = update(x.reshape(6, 1), p, z, r, np.asarray(H_GYRO))
+    assert np.allclose(x1, x2[:, 0], atol=1e-12) and np.allclose(p1, p2, atol=1e-12)
+    # scalar measurement of omega + b: gain P h / (h P h + r)
+    ph = p[:, 4] + p[:, 5]
+    gain = ph / (ph[4] + ph[5] + r[0, 0])
+    assert np.allclose(x1, x + gain * (z[0] - x[4] - x[5]), atol=1e-12)
+
+
 def test_fast_ekf_equals_filterpy():
     rng = np.random.default_rng(1)
-    fast = ChairEkf(Pose2D(1, 2, 3.0), backend="fast")
-    slow = ChairEkf(Pose2D(1, 2, 3.0), backend="filterpy")
+    fast = ChairEkf(Pose2D(1, 2, 3.0), backend="fast", gyro_bias=0.004, gyro_bias_std=0.001)
+    slow = ChairEkf(Pose2D(1, 2, 3.0), backend="filterpy", gyro_bias=0.004, gyro_bias_std=0.001)
     for k in range(400):
         d_left, d_right = rng.normal(0.01, 0.005, 2)
         rate = rng.normal(0.1, 0.05)
@@ -118,26 +147,80 @@ def test_fast_ekf_equals_filterpy():
                 ekf.update_pose(Pose2D(1 + k * 0.01, 2, -3.1), np.diag([0.01, 0.01, 0.001]))
     assert np.allclose(fast.filter.x, slow.filter.x, atol=1e-12)
     assert np.allclose(fast.filter.P, slow.filter.P, atol=1e-15)
+    assert fast.bias != 0.004  # the bias state moved
 
 
-def test_ekf_beats_odometry_and_is_consistent(calibration):
-    # a five-minute drive: the EKF's final error at most half the raw odometry's
-    log, bias = _drive(0, 300.0)
-    states, _ = _filter(log, bias, calibration, 300.0, seed=0)
+def test_bad_filter_settings_are_refused():
+    with pytest.raises(ValueError, match="backend"):
+        ChairEkf(Pose2D(), backend="numba")
+    with pytest.raises(ValueError, match="gyro_bias_std"):
+        ChairEkf(Pose2D(), gyro_bias_std=-0.1)
+    with pytest.raises(ValueError, match="EkfNoise.gyro"):
+        EkfNoise(gyro=-0.003)
+    with pytest.raises(ValueError, match="runs >= 1"):
+        nees_band(0)
+
+
+# --------------------------------------------------------------------- on the floor world
+def test_ekf_final_error_at_most_half_the_raw_odometry_on_a_five_minute_drive(calibration):
+    _, log, prior = _drive(0, 300.0)
+    states, _ = _filter(log, prior, calibration, seed=0)
     raw = odometry_from_log(log)
     ekf_error = math.hypot(*(states[-1, :2] - log.pose[-1, :2]))
     odo_error = math.hypot(*(raw[-1, :2] - log.pose[-1, :2]))
     assert ekf_error <= 0.5 * odo_error, (ekf_error, odo_error)
-    # NEES over seeded runs (10 x 60 s here; 50 x 300 s by hand, see the docs)
+
+
+def test_ekf_average_nees_inside_the_chi_square_band(calibration):
+    # 10 x 60 s here; 50 x 300 s (the issue's figure) by hand, see the module docstring
     runs, seconds = 10, 60.0
     values = []
     for seed in range(runs):
-        log, bias = _drive(seed, seconds)
-        states, covs = _filter(log, bias, calibration, seconds, seed)
+        _, log, prior = _drive(seed, seconds)
+        states, covs = _filter(log, prior, calibration, seed)
         values.append(nees(log.pose, states, covs))
     average = np.mean(values, axis=0)  # over runs, at every time step
     low, high = nees_band(runs, dof=3)
     assert low < average.mean() < high, (average.mean(), low, high)
+
+
+def test_bias_state_converges_to_the_simulators_gyro_bias(calibration):
+    sim = SimBase("floor", seed=5, errors="worn", people=False)
+    wrong = sim.gyro.bias + 0.01  # start 2 turn-on sigmas off, and say so
+    log = sim.run(FollowWaypoints(floor_mixed_drive()), 120.0)
+    states, covs = _filter(log, (wrong, 0.01), calibration, seed=5)
+    error = abs(states[-1, BIAS] - sim.gyro.bias)  # the sim's gyro holds the truth
+    assert error < 0.1 * 0.01
+    assert error < 3 * math.sqrt(covs[-1, BIAS, BIAS])
+    held = _filter(log, (wrong, 0.01), calibration, seed=5, estimate_bias=False)[0]
+    assert np.all(held[:, BIAS] == wrong)
+
+
+# --------------------------------------------------------------------- waypoints
+def test_follow_waypoints_visits_them_in_order_and_stops():
+    sim = SimBase(OPEN, seed=0, errors="ideal", people=False)
+    points = [(3.0, 0.0), (3.0, 3.0), (0.0, 3.0)]
+    route = FollowWaypoints(points, tolerance=0.2, max_speed=0.6)
+    log = sim.run(route, 40.0)
+    assert route.done
+    visits = [int(np.argmax(np.hypot(*(log.pose[:, :2] - p).T) < 0.25)) for p in points]
+    assert 0 < visits[0] < visits[1] < visits[2]
+    assert math.hypot(*(log.pose[-1, :2] - points[-1])) < 0.3
+    assert np.all(np.abs(log.pose[-25:, :2] - log.pose[-1, :2]) < 1e-3)  # standing still
+
+
+def test_waypoint_route_refuses_bad_input():
+    with pytest.raises(ValueError, match="waypoints"):
+        FollowWaypoints([])
+    with pytest.raises(ValueError, match="waypoints"):
+        FollowWaypoints([(1.0, math.nan)])
+    with pytest.raises(ValueError, match="laps"):
+        floor_mixed_drive(0)
+    frame = SensorFrame(t=0.0, ticks_left=0, ticks_right=0, gyro_z=0.0, sonar=5.0,
+                        ir=np.full(6, np.inf), joystick_fb=254, joystick_lr=254, pot_fb=128,
+                        pot_lr=128, pose=None)
+    with pytest.raises(ValueError, match="ground-truth"):
+        GroundTruth().update_frame(frame)
 
 
 def test_bench_ekf_reports_cycles_per_second():

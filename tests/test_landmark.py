@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 from abcwc.behaviours import GoToLandmark, ThesisGoToLandmark, distance_and_bearing
+from abcwc.behaviours.landmark import proportional_command, turn_then_drive
 from abcwc.estimation import Odometry
 from abcwc.sim.base import SimBase
 from abcwc.sim.world import world_from_dict
-from abcwc.types import Pose2D
+from abcwc.types import Pose2D, Twist
 
 OPEN = world_from_dict({"name": "open", "places": {"start": [0, 0, 0]},
                         "walls": [[[-10, -10], [10, -10], [10, 10], [-10, 10], [-10, -10]]]})
@@ -48,3 +49,67 @@ def test_goal_is_validated():
         GoToLandmark((float("nan"), 1.0), Odometry())
     with pytest.raises(ValueError, match="tolerance"):
         GoToLandmark((1.0, 1.0), Odometry(), tolerance=0)
+
+
+def test_turn_then_drive_states():
+    # turning with hysteresis: 0.2 rad is not yet aligned, 0.05 is
+    assert turn_then_drive("turn", 2.0, 0.2, align_tolerance=0.1) == ("turn", Twist(0, 0.5))
+    assert turn_then_drive("turn", 2.0, -0.05, align_tolerance=0.1) == ("drive", Twist(0.5, 0))
+    # driving tolerates up to heading_tolerance, then turns towards the goal (right here)
+    assert turn_then_drive("drive", 2.0, 0.2) == ("drive", Twist(0.5, 0))
+    assert turn_then_drive("drive", 2.0, -0.4) == ("turn", Twist(0, -0.5))
+    # within the tolerance it stops, and stays stopped whatever comes next
+    assert turn_then_drive("drive", 0.4, 0.0) == ("reached", Twist(0, 0))
+    assert turn_then_drive("reached", 3.0, 1.0) == ("reached", Twist(0, 0))
+    with pytest.raises(ValueError, match="state 'stop' unknown"):
+        turn_then_drive("stop", 1.0, 0.0)
+
+
+def test_proportional_command_limits():
+    far = proportional_command(2.0, 0.2)  # speed limit, times cos(alpha); w = 1.5 * 0.2
+    assert far.v == pytest.approx(0.8 * math.cos(0.2)) and far.w == pytest.approx(0.3)
+    assert proportional_command(0.3, 0.0).v == pytest.approx(0.24)  # k_rho * rho
+    assert proportional_command(0.5, 0.0, k_rho=2.0).v == pytest.approx(math.sqrt(0.5))
+    behind = proportional_command(2.0, -2.5)
+    assert behind.v == 0.0 and behind.w == pytest.approx(-0.8)
+
+
+def _open_sim(start):
+    return SimBase(OPEN, errors="ideal", people=False, start=start)
+
+
+def test_a_goal_just_left_of_west_is_a_small_left_turn():
+    # facing west (pi); the goal's bearing is -2.82 rad: unwrapped that is 5.96 rad to
+    # the right, wrapped it is 0.32 rad to the left
+    sim = _open_sim(Pose2D(0, 0, math.pi))
+    controller = ThesisGoToLandmark((-3.0, -1.0), Odometry(start=sim.pose))
+    commands = []
+    log = sim.run(lambda frame: commands.append(controller(frame)) or commands[-1], 15.0)
+    first_turn = next(c.w for c in commands if c.w != 0)
+    assert first_turn > 0  # left, towards the goal
+    heading = np.unwrap(log.pose[:, 2])
+    assert np.ptp(heading) < 0.6  # no long way round
+    assert controller.reached and controller.state == "reached"
+
+
+def test_hysteresis_sets_off_better_aimed():
+    def turn_phases(**options):
+        sim = _open_sim(Pose2D(0, 0, 0))
+        controller = ThesisGoToLandmark(GOAL, Odometry(start=sim.pose), tolerance=0.1,
+                                        **options)
+        states = []
+        sim.run(lambda frame: states.append(controller.state) or controller(frame), 30.0)
+        states.append(controller.state)
+        assert controller.reached
+        return sum(a != "turn" and b == "turn" for a, b in zip(states, states[1:]))
+
+    assert turn_phases(align_tolerance=0.1) < turn_phases()
+
+
+def test_controller_settings_are_validated():
+    with pytest.raises(ValueError, match="align_tolerance"):
+        ThesisGoToLandmark((1.0, 1.0), Odometry(), align_tolerance=0.5)
+    with pytest.raises(ValueError, match="speed"):
+        ThesisGoToLandmark((1.0, 1.0), Odometry(), speed=-0.5)
+    with pytest.raises(ValueError, match="k_alpha"):
+        GoToLandmark((1.0, 1.0), Odometry(), k_alpha=0)

@@ -11,7 +11,9 @@ from abcwc.estimation import (
     encoder_ticks_to_wheel_distance,
     integrate_odometry,
     odometry_from_log,
+    odometry_step,
     validate_log,
+    wheel_travel,
     wrap_tick_delta,
 )
 from abcwc.estimation.gyro import gyro_odometry_from_log
@@ -54,6 +56,37 @@ def test_step_odometry_survives_counter_wrap():
     odo.update(top - 500, top - 500)
     pose = odo.update(-(2**31) + 500, -(2**31) + 500)  # 1001 counts each, wrapped
     assert pose.x == pytest.approx(1001 * default_params().distance_per_count)
+
+
+def test_wheel_travel_differences_counts_and_unwraps_16_bit():
+    per_count = default_params().distance_per_count
+    ticks = np.array([[0, 0], [10, -4], [32760, 5], [-32766, 5]])
+    travel = wheel_travel(ticks, bits=16)
+    assert travel.shape == (3, 2)
+    assert np.allclose(travel / per_count, [[10, -4], [32750, 9], [10, 0]])
+    assert np.allclose(wheel_travel(ticks[:2], 0.001), [[0.010, -0.004]])
+    with pytest.raises(ValueError, match="shape"):
+        wheel_travel(np.arange(6))
+    with pytest.raises(ValueError, match="whole"):
+        wheel_travel(np.array([[0.0, 0.0], [0.5, np.nan]]))
+
+
+def test_odometry_step_closed_forms():
+    b = 0.44
+    ahead = odometry_step(Pose2D(1.0, 2.0, math.pi / 6), 0.3, 0.3, b)
+    assert (ahead.x, ahead.y) == pytest.approx((1.0 + 0.3 * math.cos(math.pi / 6),
+                                                2.0 + 0.3 * math.sin(math.pi / 6)))
+    spin = odometry_step(Pose2D(1.0, 2.0, 3.0), -0.11, 0.11, b)
+    assert (spin.x, spin.y) == pytest.approx((1.0, 2.0))
+    assert spin.theta == pytest.approx(3.0 + 0.5 - 2 * math.pi)  # wrapped past +pi
+    # one exact step lands on the circle of radius R = b/2 (d_r + d_l)/(d_r - d_l)
+    d_l, d_r = 0.4, 0.6
+    radius, phi = b / 2 * (d_r + d_l) / (d_r - d_l), (d_r - d_l) / b
+    arc = odometry_step(Pose2D(), d_l, d_r, b, method="exact")
+    assert (arc.x, arc.y, arc.theta) == pytest.approx(
+        (radius * math.sin(phi), radius * (1 - math.cos(phi)), phi))
+    euler = odometry_step(Pose2D(), d_l, d_r, b)  # eqns 9-10: along the old heading
+    assert (euler.x, euler.y) == pytest.approx((0.5, 0.0))
 
 
 def test_methods_on_a_circle():

@@ -1,21 +1,33 @@
 """UMBmark (Borenstein and Feng 1996): formulas, the thesis's trials, the simulator."""
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+from abcwc.estimation.odometry import Odometry
 from abcwc.estimation.umbmark import (
+    SquareDriver,
+    alpha_beta,
+    centres_of_gravity,
+    curve_radius,
+    drive_square,
     e_max_syst,
     load_thesis_trials,
     model_return_error,
+    run_square,
     run_umbmark,
     thesis_a16_outputs,
     trial_covariance,
     umbmark_corrections,
+    wheel_base_ratio,
+    wheel_correction_factors,
+    wheel_diameter_ratio,
 )
 from abcwc.sim.base import SimBase
 from abcwc.sim.motor import ChairErrors
+from abcwc.types import Pose2D
 from tests.conftest import box_world
 
 OPEN = box_world(20, 20, centred=True)
@@ -88,3 +100,80 @@ def test_umbmark_in_the_simulator_cuts_systematic_error():
     assert result.e_b == pytest.approx(1.03, abs=0.005)
     assert result.c_left == pytest.approx(0.995, abs=0.001)
     assert result.c_right == pytest.approx(1.005, abs=0.001)
+
+
+def test_the_steps_of_the_method_agree_with_the_model():
+    """alpha_beta, curve_radius, wheel_diameter_ratio, wheel_base_ratio invert the model."""
+    side, b, e_d, e_b = 4.0, 0.35, 0.992, 0.97  # a chair curving right, short turns
+    cw = model_return_error(side, b, e_d, e_b, "cw")
+    ccw = model_return_error(side, b, e_d, e_b, "ccw")
+    cg_cw, cg_ccw = centres_of_gravity([cw, cw], [ccw])
+    assert np.allclose(cg_cw, cw) and np.allclose(cg_ccw, ccw)
+    angles = {use: alpha_beta(cg_cw, cg_ccw, side, use) for use in ("x", "y", "xy")}
+    alpha = math.pi / 2 * (1 - 1 / e_b)
+    for got_alpha, got_beta in angles.values():
+        assert got_alpha == pytest.approx(alpha) and got_beta < 0
+    radius = curve_radius(angles["x"][1], side)
+    assert radius < 0  # curving right
+    assert wheel_diameter_ratio(radius, e_b * b) == pytest.approx(e_d)
+    assert wheel_base_ratio(alpha) == pytest.approx(e_b)
+    c_left, c_right = wheel_correction_factors(e_d)
+    assert c_right / c_left == pytest.approx(e_d) and (c_left + c_right) / 2 == pytest.approx(
+        1.0, abs=1e-4)
+
+
+def test_the_steps_handle_a_perfect_chair_and_refuse_nonsense():
+    assert curve_radius(0.0, 3.5) == math.inf
+    assert wheel_diameter_ratio(math.inf, 0.44) == 1.0
+    assert wheel_correction_factors(1.0) == (1.0, 1.0)
+    with pytest.raises(ValueError, match="side"):
+        alpha_beta([0, 0], [0, 0], 0.0)
+    with pytest.raises(ValueError, match="inside the wheel base"):
+        wheel_diameter_ratio(0.1, 0.44)
+    with pytest.raises(ValueError, match="alpha"):
+        wheel_base_ratio(math.pi / 2)
+    with pytest.raises(ValueError, match="E_d"):
+        wheel_correction_factors(0.0)
+    with pytest.raises(ValueError, match="brake_gain"):
+        SquareDriver(Odometry(), brake_gain=0.0)
+
+
+def test_run_square_reports_in_the_start_frame():
+    """A perfect chair started anywhere closes the square; its path starts at the origin."""
+    start = Pose2D(-3.0, 2.0, 2.5)
+    sim = SimBase(OPEN, seed=1, errors="ideal", people=False, start=start)
+    run = run_square(sim, "cw", side=2.0)
+    assert np.allclose(run.true_path[0], 0.0, atol=1e-9)
+    assert np.abs(run.error[:2]).max() < 0.01 and abs(run.error[2]) < 0.005
+    # the corners in the start frame: x ahead, then to the right (cw)
+    assert run.true_path[:, 0].max() == pytest.approx(2.0, abs=0.05)
+    assert run.true_path[:, 1].min() == pytest.approx(-2.0, abs=0.05)
+    # the true end, turned back into the world, is where the simulator left the chair
+    end = run.true_end
+    c, s = math.cos(start.theta), math.sin(start.theta)
+    assert sim.pose.x == pytest.approx(start.x + c * end.x - s * end.y, abs=1e-9)
+    assert sim.pose.y == pytest.approx(start.y + s * end.x + c * end.y, abs=1e-9)
+    assert 20.0 < run.seconds < 80.0
+
+
+def test_run_square_without_ground_truth_gives_nan():
+    """The real chair has no ground truth: the odometric end only, and no error."""
+
+    class NoTruth:
+        def __init__(self, sim):
+            self.sim, self.period, self.params = sim, sim.period, sim.params
+
+        def read(self):
+            return dataclasses.replace(self.sim.read(), pose=None)
+
+        def run(self, controller, seconds):
+            log = self.sim.run(lambda f: controller(dataclasses.replace(f, pose=None)), seconds)
+            log.pose[:] = np.nan
+            return log
+
+    body = NoTruth(SimBase(OPEN, seed=0, errors=ChairErrors(wheel_base=1.03), people=False))
+    run = run_square(body, "ccw", side=1.0)
+    assert run.true_end is None and np.isnan(run.error).all()
+    assert math.hypot(run.odometric_end.x, run.odometric_end.y) < 0.02
+    with pytest.raises(ValueError, match="ground truth"):
+        drive_square(body, "ccw", side=1.0)

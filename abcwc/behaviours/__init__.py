@@ -6,5 +6,7 @@ from abcwc.behaviours.landmark import (
     ThesisGoToLandmark,
     distance_and_bearing,
 )
+from abcwc.behaviours.waypoints import FollowWaypoints, GroundTruth, floor_mixed_drive
 
-__all__ = ["GoToLandmark", "PoseEstimator", "ThesisGoToLandmark", "distance_and_bearing"]
+__all__ = ["FollowWaypoints", "GoToLandmark", "GroundTruth", "PoseEstimator",
+           "ThesisGoToLandmark", "distance_and_bearing", "floor_mixed_drive"]

@@ -6,6 +6,8 @@ from abcwc.estimation.ekf import (
     FastEkf,
     FilterpyEkf,
     absolute_fixes,
+    gyro_bias_prior,
+    kalman_update,
     nees,
     nees_band,
     noise_from_models,
@@ -13,8 +15,10 @@ from abcwc.estimation.ekf import (
 )
 from abcwc.estimation.gyro import (
     GyroOdometry,
+    allan_deviation,
     estimate_gyro_bias,
     gyro_odometry_from_log,
+    gyro_odometry_step,
     integrate_gyro_heading,
 )
 from abcwc.estimation.odometry import (
@@ -22,28 +26,42 @@ from abcwc.estimation.odometry import (
     encoder_ticks_to_wheel_distance,
     integrate_odometry,
     odometry_from_log,
+    odometry_step,
     validate_log,
+    wheel_travel,
     wrap_tick_delta,
 )
 from abcwc.estimation.umbmark import (
     SquareDriver,
+    SquareRun,
     UmbmarkResult,
+    alpha_beta,
     calibrate_distance_scale,
+    centres_of_gravity,
+    curve_radius,
     drive_square,
     e_max_syst,
     load_thesis_trials,
     model_return_error,
+    run_square,
     run_umbmark,
     trial_covariance,
     umbmark_corrections,
+    wheel_base_ratio,
+    wheel_correction_factors,
+    wheel_diameter_ratio,
 )
 
 __all__ = [
     "ChairEkf", "EkfNoise", "FastEkf", "FilterpyEkf", "GyroOdometry", "Odometry",
-    "SquareDriver", "UmbmarkResult", "absolute_fixes", "calibrate_distance_scale",
+    "SquareDriver", "SquareRun", "UmbmarkResult", "absolute_fixes", "alpha_beta",
+    "calibrate_distance_scale", "centres_of_gravity", "curve_radius",
     "drive_square", "e_max_syst", "encoder_ticks_to_wheel_distance", "estimate_gyro_bias",
-    "gyro_odometry_from_log", "integrate_gyro_heading", "integrate_odometry",
+    "gyro_bias_prior", "kalman_update",
+    "gyro_odometry_from_log", "gyro_odometry_step", "allan_deviation",
+    "integrate_gyro_heading", "integrate_odometry",
     "load_thesis_trials", "model_return_error", "nees", "nees_band", "noise_from_models",
-    "odometry_from_log", "run_ekf", "run_umbmark", "trial_covariance",
-    "umbmark_corrections", "validate_log", "wrap_tick_delta",
+    "odometry_from_log", "odometry_step", "run_ekf", "run_umbmark", "trial_covariance",
+    "run_square", "umbmark_corrections", "validate_log", "wheel_base_ratio", "wheel_travel",
+    "wheel_correction_factors", "wheel_diameter_ratio", "wrap_tick_delta",
 ]

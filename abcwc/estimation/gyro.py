@@ -16,6 +16,10 @@ Timing convention of a :class:`abcwc.log.RunLog` (and of the simulator): the sam
 at row ``k`` is the rate over the period that starts at ``t[k]``, while the counts at
 row ``k`` are the travel over the period that ends there. So
 ``theta[k + 1] = theta[k] + (g_z[k] - bias) (t[k + 1] - t[k])``.
+
+:func:`allan_deviation` tells the gyro's noise terms apart in a still recording:
+white rate noise falls as ``N / sqrt(tau)`` (angle random walk ``N``), the bias's
+random walk rises as ``K sqrt(tau / 3)`` (IEEE Std 952-1997, annex C).
 """
 
 from __future__ import annotations
@@ -110,6 +114,75 @@ def gyro_odometry_from_log(
     return out
 
 
+def gyro_odometry_step(pose: Pose2D, d_left: float, d_right: float, gyro_z: float,
+                       dt: float, bias: float = 0.0) -> Pose2D:
+    """One step of eqns 14-16: turn by the gyro, move by the wheels' mean travel.
+
+    ``d_left``, ``d_right`` (m) are the wheels' travel over the step, ``gyro_z``
+    (rad/s) the rate sample of the step, ``dt`` (s) its length, ``bias`` (rad/s) the
+    gyro's estimated bias::
+
+        phi = (gyro_z - bias) dt              (eqn 14, one rectangle)
+        d_c = (d_r + d_l) / 2                 (eqn 6)
+        x' = x + d_c cos(theta + phi / 2)     (eqn 16, midpoint heading)
+        y' = y + d_c sin(theta + phi / 2)
+        theta' = theta + phi                  (wrapped to (-pi, pi])
+
+    The wheels' own heading change ``(d_r - d_l) / b`` is not used at all.
+    """
+    values = {"d_left": d_left, "d_right": d_right, "gyro_z": gyro_z, "dt": dt, "bias": bias}
+    for name, value in values.items():
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be a finite number, got {value!r}")
+    if not dt > 0:
+        raise ValueError(f"dt must be > 0 s, got {dt!r}")
+    phi = (gyro_z - bias) * dt
+    d_c = (d_right + d_left) / 2.0
+    heading = pose.theta + phi / 2.0
+    return Pose2D(pose.x + d_c * math.cos(heading), pose.y + d_c * math.sin(heading),
+                  wrap_angle(pose.theta + phi))
+
+
+def allan_deviation(rates: np.ndarray, period: float,
+                    cluster_sizes: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Overlapping Allan deviation of a still recording: ``(taus, adev)`` (s, rad/s).
+
+    With ``theta`` the running integral of the rates (``theta[0] = 0``, ``n + 1``
+    values) and ``tau = m period``, averaging over every ``k`` that fits::
+
+        adev(tau)^2 = mean_k (theta[k + 2m] - 2 theta[k + m] + theta[k])^2 / (2 tau^2)
+
+    (IEEE Std 952-1997, annex C). ``cluster_sizes`` are the ``m`` to use (default:
+    about 10 per decade from 1 to ``n / 10``). White noise of ``s`` rad/s per sample
+    gives ``s sqrt(period / tau)``; a bias random walk of ``K`` rad/s/sqrt(s) gives
+    ``K sqrt(tau / 3)``; a constant bias gives 0.
+    """
+    values = np.asarray(rates, dtype=float).ravel()
+    if not (math.isfinite(period) and period > 0):
+        raise ValueError(f"period must be > 0 s, got {period!r}")
+    if values.size < 3:
+        raise ValueError(f"allan_deviation needs at least 3 samples, got {values.size}")
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise ValueError(f"rate sample at index {bad[0]} is not finite ({values[bad[0]]})")
+    n = values.size
+    if cluster_sizes is None:
+        top = max(n // 10, 1)
+        per_decade = int(10 * np.log10(top)) + 1
+        cluster_sizes = np.unique(np.round(np.logspace(0, np.log10(top), per_decade)))
+    sizes = np.asarray(cluster_sizes, dtype=float).ravel()
+    m = np.round(sizes).astype(np.int64) if np.isfinite(sizes).all() else np.zeros(0, int)
+    if m.size == 0 or (m != sizes).any() or (m < 1).any() or (2 * m >= n).any():
+        raise ValueError(f"cluster sizes must be whole numbers from 1 to {(n - 1) // 2} "
+                         f"for {n} samples, got {np.asarray(cluster_sizes)!r}")
+    theta = np.concatenate([[0.0], np.cumsum(values)]) * period
+    adev = np.empty(m.size)
+    for i, size in enumerate(m):
+        second = theta[2 * size:] - 2.0 * theta[size:-size] + theta[:-2 * size]
+        adev[i] = math.sqrt(np.mean(second**2) / 2.0) / (size * period)
+    return m * period, adev
+
+
 class GyroOdometry:
     """Step by step: gyro heading, encoder distance (midpoint heading per step).
 
@@ -136,13 +209,9 @@ class GyroOdometry:
         if not t > t0:
             raise ValueError(f"timestamps must increase: {t0} s then {t} s")
         per_count = self.params.distance_per_count
-        d_c = ((int(ticks_left) - left0) * per_count * self.correction[0]
-               + (int(ticks_right) - right0) * per_count * self.correction[1]) / 2.0
-        phi = (rate - self.bias) * (t - t0)
-        heading = self.pose.theta + phi / 2.0
-        self.pose = Pose2D(self.pose.x + d_c * math.cos(heading),
-                           self.pose.y + d_c * math.sin(heading),
-                           wrap_angle(self.pose.theta + phi))
+        d_left = (int(ticks_left) - left0) * per_count * self.correction[0]
+        d_right = (int(ticks_right) - right0) * per_count * self.correction[1]
+        self.pose = gyro_odometry_step(self.pose, d_left, d_right, rate, t - t0, self.bias)
         self._last = (int(ticks_left), int(ticks_right), float(t), float(gyro_z))
         return self.pose
 

@@ -28,7 +28,8 @@ Three choices of ``theta_used`` (the ``method`` argument):
 
 The same maths runs on a whole log at once (:func:`integrate_odometry`,
 :func:`odometry_from_log`: ``np.cumsum`` of per-step increments) and step by step
-(:class:`Odometry`, what a controller calls every period).
+(:func:`odometry_step`, :class:`Odometry`: what a controller calls every period).
+:func:`wheel_travel` turns a log's cumulative counts into per-step travel.
 """
 
 from __future__ import annotations
@@ -79,6 +80,32 @@ def encoder_ticks_to_wheel_distance(
     return float(ticks) * per_count * float(correction)
 
 
+def wheel_travel(
+    ticks: np.ndarray, distance_per_count: float | None = None, bits: int = 32
+) -> np.ndarray:
+    """Per-period wheel travel (m), ``(N - 1, 2)`` left/right, from cumulative counts.
+
+    ``ticks`` is an ``(N, 2)`` array of cumulative counts (left, right), as in a log.
+    Each row's travel is the difference from the row before, corrected for the
+    counter wrapping at ``bits`` width (:func:`abcwc.types.wrap_tick_delta`), times
+    ``distance_per_count`` (m; default the nominal ``pi d_e / N_e``, 4.2.1).
+    """
+    counts = np.asarray(ticks)
+    if counts.ndim != 2 or counts.shape[1] != 2:
+        raise ValueError(f"ticks must have shape (N, 2) (left, right counts), got {counts.shape}")
+    if counts.dtype.kind == "f":
+        if not np.isfinite(counts).all() or not (counts == np.round(counts)).all():
+            raise ValueError("ticks must be whole, finite counts")
+    elif counts.dtype.kind not in "iu":
+        raise ValueError(f"ticks must be integer counts, got dtype {counts.dtype}")
+    if distance_per_count is None:
+        distance_per_count = default_params().distance_per_count
+    if not distance_per_count > 0:
+        raise ValueError(f"distance_per_count must be > 0 m, got {distance_per_count!r}")
+    deltas = wrap_tick_delta(np.diff(counts.astype(np.int64), axis=0), bits)
+    return deltas * float(distance_per_count)
+
+
 def pose_increments(
     d_left: np.ndarray, d_right: np.ndarray, wheel_base: float
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -99,6 +126,32 @@ def _chord(d_c: np.ndarray, phi: np.ndarray, theta_old: np.ndarray,
         heading = theta_old + phi / 2.0
         length = d_c * np.sinc(phi / (2.0 * np.pi)) if method == "exact" else d_c
     return length * np.cos(heading), length * np.sin(heading)
+
+
+def odometry_step(
+    pose: Pose2D, d_left: float, d_right: float, wheel_base: float,
+    method: Method = "euler",
+) -> Pose2D:
+    """The pose after one period's wheel travels ``d_left``, ``d_right`` (m): eqns 6-10.
+
+    ``method`` picks the heading the step's chord points along (see the module
+    docstring); ``"euler"`` is eqns 9-10 as printed. Heading wrapped to (-pi, pi].
+    """
+    _check_method(method)
+    if not wheel_base > 0:
+        raise ValueError(f"wheel_base must be > 0 m, got {wheel_base!r}")
+    d_c = (d_right + d_left) / 2.0
+    phi = (d_right - d_left) / wheel_base
+    theta = pose.theta
+    if method == "euler":
+        heading, length = theta, d_c
+    else:
+        half = phi / 2.0
+        heading = theta + half
+        exact = method == "exact" and half != 0.0
+        length = d_c * math.sin(half) / half if exact else d_c
+    return Pose2D(pose.x + length * math.cos(heading), pose.y + length * math.sin(heading),
+                  wrap_angle(theta + phi))
 
 
 def integrate_odometry(
@@ -169,8 +222,9 @@ def log_wheel_travel(
 ) -> np.ndarray:
     """Per-step wheel travel (m), ``(N - 1, 2)`` left/right, from a log's counts."""
     validate_log(log)
-    deltas = wrap_tick_delta(np.diff(np.asarray(log.ticks).astype(np.int64), axis=0), bits)
-    return encoder_ticks_to_wheel_distance(deltas, params, correction)
+    p = params or default_params()
+    travel = wheel_travel(log.ticks, p.distance_per_count, bits)
+    return travel * np.asarray(correction, dtype=float)
 
 
 def _log_start(log: RunLog, start: Pose2D | None) -> Pose2D:
@@ -251,20 +305,10 @@ class Odometry:
         per_count = self.params.distance_per_count
         d_left = dl * per_count * self.correction[0]
         d_right = dr * per_count * self.correction[1]
+        self.pose = odometry_step(self.pose, d_left, d_right, self.wheel_base, self.method)
         d_c = (d_right + d_left) / 2.0
-        phi = (d_right - d_left) / self.wheel_base
-        theta = self.pose.theta
-        if self.method == "euler":
-            heading, length = theta, d_c
-        else:
-            heading = theta + phi / 2.0
-            half = phi / 2.0
-            exact = self.method == "exact" and half != 0.0
-            length = d_c * math.sin(half) / half if exact else d_c
-        self.pose = Pose2D(self.pose.x + length * math.cos(heading),
-                           self.pose.y + length * math.sin(heading), wrap_angle(theta + phi))
         self.distance += d_c
-        self.last_step = (d_c, phi)
+        self.last_step = (d_c, (d_right - d_left) / self.wheel_base)
         return self.pose
 
     def update_frame(self, frame: SensorFrame) -> Pose2D:

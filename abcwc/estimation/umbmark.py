@@ -25,16 +25,20 @@ so from the centres of gravity of each direction's errors (all angles in radians
     E_b = (pi/2) / (pi/2 - alpha),   b_actual = E_b b_nominal
     c_l = 2 / (E_d + 1),             c_r = 2 / (1 / E_d + 1)
 
-and ``E_max,syst = max(|cg_cw|, |cg_ccw|)``. ``c_l`` and ``c_r`` multiply each wheel's
-distance per count: they fix the ratio of the two wheels and keep their mean. The
-paper's x formulas come out with the same signs in our frame; its y formulas are the
-sign pattern above (``alpha = (y_cw - y_ccw)/(-4L)``, ``beta = (y_cw + y_ccw)/(-4L)``).
+and ``E_max,syst = max(|cg_cw|, |cg_ccw|)``. Equation numbers (5.x) in this module are
+those of the same derivation in chapter 5 of Borenstein, Everett and Feng's report
+*Where am I? Sensors and methods for mobile robot positioning* (1996). ``c_l`` and
+``c_r`` multiply each wheel's distance per count: they fix the ratio of the two wheels
+and keep their mean. The paper's x formulas come out with the same signs in our frame;
+its y formulas are the sign pattern above (``alpha = (y_cw - y_ccw)/(-4L)``,
+``beta = (y_cw + y_ccw)/(-4L)``).
 
 Where the thesis's A.16 script goes wrong (:func:`thesis_a16_outputs` runs it as printed):
 
 1. it turns alpha and beta into degrees (``* 180/pi``) and then takes ``sin(beta/2)``
-   with MATLAB's radian ``sin``, and multiplies R by ``180/3.14`` afterwards: R is
-   neither metres nor consistent;
+   with MATLAB's radian ``sin``, and multiplies R by ``180/3.14`` afterwards: for beta
+   of a few tenths of a degree the two slips nearly cancel (the thesis's own data: R
+   -702.8 for -700.0 m), for a few degrees they do not (R twice too long at 4 deg);
 2. ``E_d = (R + beta/2) / (R - beta/2)`` puts the angle ``beta`` where the wheel base
    ``b`` belongs, so E_d is not a wheel-diameter ratio at all;
 3. ``E_b = 90 / (90 - alpha)`` is right (alpha in degrees there);
@@ -57,6 +61,7 @@ from pathlib import Path
 import numpy as np
 
 from abcwc.estimation.odometry import Odometry
+from abcwc.params import default_params
 from abcwc.paths import data_dir
 from abcwc.types import Pose2D, SensorFrame, Twist, wrap_angle
 
@@ -103,6 +108,88 @@ def _errors(errors: np.ndarray, name: str) -> np.ndarray:
     return arr
 
 
+def centres_of_gravity(cw_errors: np.ndarray, ccw_errors: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """``(x, y)`` centres of gravity (m) of the CW and of the CCW return errors.
+
+    Borenstein and Feng's ``x_c.g. = (1/n) sum eps_x``, ``y_c.g. = (1/n) sum eps_y`` for
+    each direction (eqn 5.4 in Borenstein, Everett and Feng's report). ``*_errors``
+    are ``(n, 2)`` or ``(n, 3)`` arrays; a theta column is ignored.
+    """
+    cw = _errors(cw_errors, "cw_errors")[:, :2].mean(axis=0)
+    ccw = _errors(ccw_errors, "ccw_errors")[:, :2].mean(axis=0)
+    return cw, ccw
+
+
+def alpha_beta(cg_cw: np.ndarray, cg_ccw: np.ndarray, side: float,
+               use: str = "xy") -> tuple[float, float]:
+    """Type A and type B angles ``(alpha, beta)`` (rad) from the two centres of gravity.
+
+    ``use="x"``: the paper's ``alpha = (x_cw + x_ccw) / (-4L)``, ``beta = (x_cw - x_ccw)
+    / (-4L)`` (its eqns 5.9, 5.10 without the ``180/pi``); ``"y"``: the same from the y
+    errors, ``alpha = (y_cw - y_ccw) / (-4L)``, ``beta = (y_cw + y_ccw) / (-4L)``;
+    ``"xy"``: their mean (see :func:`umbmark_corrections`).
+    """
+    if not side > 0:
+        raise ValueError(f"side must be > 0 m, got {side!r}")
+    (x_cw, y_cw), (x_ccw, y_ccw) = np.asarray(cg_cw, float)[:2], np.asarray(cg_ccw, float)[:2]
+    alpha_x, beta_x = (x_cw + x_ccw) / (-4.0 * side), (x_cw - x_ccw) / (-4.0 * side)
+    alpha_y, beta_y = (y_cw - y_ccw) / (-4.0 * side), (y_cw + y_ccw) / (-4.0 * side)
+    if use == "x":
+        return float(alpha_x), float(beta_x)
+    if use == "y":
+        return float(alpha_y), float(beta_y)
+    if use == "xy":
+        return float(alpha_x + alpha_y) / 2, float(beta_x + beta_y) / 2
+    raise ValueError(f"use must be 'x', 'y' or 'xy', got {use!r}")
+
+
+def curve_radius(beta: float, side: float) -> float:
+    """Radius (m) of the "straight" legs: ``R = (L/2) / sin(beta/2)`` (eqn 5.11).
+
+    A leg of length L that turns the chair by ``beta`` (rad) is an arc of that radius;
+    positive R curves left. ``inf`` when ``beta`` is 0.
+    """
+    if not side > 0:
+        raise ValueError(f"side must be > 0 m, got {side!r}")
+    return math.inf if beta == 0.0 else (side / 2) / math.sin(beta / 2)
+
+
+def wheel_diameter_ratio(radius: float, wheel_base: float) -> float:
+    """``E_d = D_R / D_L = (R + b/2) / (R - b/2)`` (eqn 5.12); 1 for a straight leg.
+
+    ``b`` (m) is the wheel base the wheels really have: the two wheels roll on arcs
+    ``b`` apart. The paper writes the nominal b here; :func:`umbmark_corrections`
+    passes the corrected one, ``E_b b_nominal`` (3 % of a 1 % effect).
+    """
+    if not wheel_base > 0:
+        raise ValueError(f"wheel_base must be > 0 m, got {wheel_base!r}")
+    if math.isinf(radius):
+        return 1.0
+    if abs(radius) <= wheel_base / 2:
+        raise ValueError(f"radius {radius:.3g} m is inside the wheel base: beta is too large "
+                         "for the small-error model")
+    return (radius + wheel_base / 2) / (radius - wheel_base / 2)
+
+
+def wheel_base_ratio(alpha: float) -> float:
+    """``E_b = b_actual / b_nominal = 90 deg / (90 deg - alpha)`` (eqn 5.15), alpha in rad."""
+    if not abs(alpha) < math.pi / 2:
+        raise ValueError(f"alpha {alpha!r} rad is not a small turn error (|alpha| < pi/2)")
+    return (math.pi / 2) / (math.pi / 2 - alpha)
+
+
+def wheel_correction_factors(e_d: float) -> tuple[float, float]:
+    """``(c_left, c_right) = (2 / (E_d + 1), 2 / (1/E_d + 1))``.
+
+    They multiply each wheel's distance per count: their ratio is ``E_d`` and their
+    mean stays 1 (to first order), so the average wheel size is left alone.
+    """
+    if not e_d > 0:
+        raise ValueError(f"E_d must be > 0, got {e_d!r}")
+    return 2.0 / (e_d + 1.0), 2.0 / (1.0 / e_d + 1.0)
+
+
 def umbmark_corrections(
     cw_errors: np.ndarray, ccw_errors: np.ndarray, side: float, wheel_base: float,
     use: str = "xy",
@@ -122,33 +209,18 @@ def umbmark_corrections(
     """
     if not side > 0 or not wheel_base > 0:
         raise ValueError(f"side and wheel_base must be > 0 m, got {side!r}, {wheel_base!r}")
-    cw = _errors(cw_errors, "cw_errors")[:, :2].mean(axis=0)
-    ccw = _errors(ccw_errors, "ccw_errors")[:, :2].mean(axis=0)
-    alpha_x, beta_x = (cw[0] + ccw[0]) / (-4.0 * side), (cw[0] - ccw[0]) / (-4.0 * side)
-    alpha_y, beta_y = (cw[1] - ccw[1]) / (-4.0 * side), (cw[1] + ccw[1]) / (-4.0 * side)
-    if use == "x":
-        alpha, beta = alpha_x, beta_x
-    elif use == "y":
-        alpha, beta = alpha_y, beta_y
-    elif use == "xy":
-        alpha, beta = (alpha_x + alpha_y) / 2, (beta_x + beta_y) / 2
-    else:
-        raise ValueError(f"use must be 'x', 'y' or 'xy', got {use!r}")
-    e_b = (math.pi / 2) / (math.pi / 2 - alpha)
+    cw, ccw = centres_of_gravity(cw_errors, ccw_errors)
+    alpha, beta = alpha_beta(cw, ccw, side, use)
+    e_b = wheel_base_ratio(alpha)
     b_actual = e_b * wheel_base
-    if beta == 0.0:
-        radius, e_d = math.inf, 1.0
-    else:
-        radius = (side / 2) / math.sin(beta / 2)
-        if abs(radius) <= b_actual / 2:
-            raise ValueError(f"beta {beta:.3g} rad is too large for the small-error model")
-        e_d = (radius + b_actual / 2) / (radius - b_actual / 2)
+    radius = curve_radius(beta, side)
+    e_d = wheel_diameter_ratio(radius, b_actual)
+    c_left, c_right = wheel_correction_factors(e_d)
     return UmbmarkResult(
         side=side, cg_cw=(float(cw[0]), float(cw[1])), cg_ccw=(float(ccw[0]), float(ccw[1])),
         e_max_syst=float(max(np.hypot(*cw), np.hypot(*ccw))), alpha=float(alpha),
         beta=float(beta), radius=float(radius), e_d=float(e_d), e_b=float(e_b),
-        wheel_base=float(b_actual), c_left=float(2.0 / (e_d + 1.0)),
-        c_right=float(2.0 / (1.0 / e_d + 1.0)),
+        wheel_base=float(b_actual), c_left=float(c_left), c_right=float(c_right),
     )
 
 
@@ -180,14 +252,23 @@ class SquareDriver:
     to the distance left, stop on it; wait until the wheels stand still; turn on the
     spot to the next heading (proportional, 0.1 degree tolerance); wait again. Call it
     with every SensorFrame (``SimBase.run``); :attr:`done` is set at the end.
+
+    ``speed`` (m/s) and ``turn_rate`` (rad/s) are the most it asks for; ``settle`` (s)
+    the waits; ``brake_gain`` (1/s) the speed per metre left near a corner and
+    ``turn_gain`` (1/s) the turn rate per radian left (higher: quicker, less gentle).
     """
 
     def __init__(self, odometry: Odometry, side: float = THESIS_SIDE, direction: str = "ccw",
-                 speed: float = 0.5, turn_rate: float = 0.5, settle: float = 0.6):
+                 speed: float = 0.5, turn_rate: float = 0.5, settle: float = 0.6,
+                 brake_gain: float = 0.8, turn_gain: float = 1.5):
         if direction not in ("cw", "ccw"):
             raise ValueError(f"direction must be 'cw' or 'ccw', got {direction!r}")
+        if not (brake_gain > 0 and turn_gain > 0):
+            raise ValueError(f"brake_gain and turn_gain must be > 0 (1/s), got {brake_gain!r}, "
+                             f"{turn_gain!r}")
         self.odometry = odometry
         self.side, self.speed, self.turn_rate, self.settle = side, speed, turn_rate, settle
+        self.brake_gain, self.turn_gain = brake_gain, turn_gain
         self.sign = 1.0 if direction == "ccw" else -1.0
         self.start: Pose2D | None = None
         self.leg = 0
@@ -220,7 +301,7 @@ class SquareDriver:
                 return Twist(0.0, 0.0)
             bearing = math.atan2(gy - pose.y, gx - pose.x) if along > 0.3 else leg_heading
             w = _clip(2.0 * wrap_angle(bearing - pose.theta), self.turn_rate)
-            return Twist(min(self.speed, max(0.03, 0.8 * along)), w)
+            return Twist(min(self.speed, max(0.03, self.brake_gain * along)), w)
         target = self._corner(self.leg + 2)[2] if self.leg < 3 else self.start.theta
         error = wrap_angle(target - pose.theta)
         if abs(error) <= 0.0017:
@@ -228,7 +309,8 @@ class SquareDriver:
             self.phase, self._wait_until = "drive", frame.t + self.settle
             self.done = self.leg == 4
             return Twist(0.0, 0.0)
-        rate = math.copysign(max(0.02, min(self.turn_rate, 1.5 * abs(error))), error)
+        rate = math.copysign(max(0.02, min(self.turn_rate, self.turn_gain * abs(error))),
+                              error)
         return Twist(0.0, rate)
 
 
@@ -244,28 +326,89 @@ def return_error(start: Pose2D, true_end: Pose2D, odometric_end: Pose2D) -> np.n
                      wrap_angle(true_end.theta - odometric_end.theta)])
 
 
+@dataclass(frozen=True)
+class SquareRun:
+    """One square driven by odometry, in its start frame (x ahead, y left; m, rad)."""
+
+    direction: str
+    side: float  # m
+    seconds: float  # s of driving, including the wait for the wheels to stop
+    odometric_end: Pose2D  # where the odometry says the chair ended
+    true_path: np.ndarray  # (N, 3) ground truth in the start frame; NaN on the real chair
+
+    @property
+    def true_end(self) -> Pose2D | None:
+        """Where the chair really ended (start frame), or None without ground truth."""
+        last = self.true_path[-1] if len(self.true_path) else np.full(3, np.nan)
+        return Pose2D(*map(float, last)) if np.isfinite(last).all() else None
+
+    @property
+    def error(self) -> np.ndarray:
+        """Return error ``true - odometric`` end ``[x, y, theta]``; NaN without ground truth."""
+        true_end = self.true_end
+        if true_end is None:
+            return np.full(3, np.nan)
+        return return_error(Pose2D(), true_end, self.odometric_end)
+
+
+def run_square(base, direction: str, side: float = THESIS_SIDE,
+               correction: tuple[float, float] = (1.0, 1.0), wheel_base: float | None = None,
+               speed: float = 0.5, turn_rate: float = 0.5, settle: float = 0.6,
+               timeout: float = 200.0, chunk: float = 1.0, **driver_options: float
+               ) -> SquareRun:
+    """Drive one UMBmark square on any chair body (simulator, firmware, real chair).
+
+    A :class:`SquareDriver` steers by odometry that starts at the origin of the start
+    frame; the chair runs in ``chunk`` second pieces until the square is done, then
+    one more second for the wheels to stop. Where the body reports ground truth (the
+    simulator, the firmware in the loop) the true path comes back in the start frame;
+    on the real chair it is NaN and you measure the end by hand. ``driver_options``
+    (``brake_gain``, ``turn_gain``) go to the :class:`SquareDriver`.
+    """
+    if not (chunk > 0 and timeout > 0):
+        raise ValueError(f"chunk and timeout must be > 0 s, got {chunk!r}, {timeout!r}")
+    params = getattr(base, "params", None) or default_params()
+    first = base.read()
+    odometry = Odometry(params, correction=correction, wheel_base=wheel_base)
+    driver = SquareDriver(odometry, side, direction, speed, turn_rate, settle,
+                          **driver_options)
+    logs = []
+    elapsed = 0.0
+    while not driver.done:
+        if elapsed >= timeout:
+            raise RuntimeError(f"{direction} square not finished in {timeout:g} s")
+        logs.append(base.run(driver, chunk))
+        elapsed += chunk
+    logs.append(base.run(driver, 1.0))  # done: it sends zero; let the wheels stop
+    odometry.update_frame(base.read())
+    poses = np.vstack([log.pose for log in logs])
+    start = first.pose
+    if start is None or not np.isfinite(poses).all():
+        path = np.full_like(poses, np.nan)
+    else:
+        c, s = math.cos(start.theta), math.sin(start.theta)
+        dx, dy = poses[:, 0] - start.x, poses[:, 1] - start.y
+        heading = [wrap_angle(theta - start.theta) for theta in poses[:, 2]]
+        path = np.column_stack([c * dx + s * dy, -s * dx + c * dy, heading])
+    seconds = sum(len(log) for log in logs) * base.period
+    return SquareRun(direction, float(side), float(seconds), odometry.pose, path)
+
+
 def drive_square(sim, direction: str, side: float = THESIS_SIDE,
                  correction: tuple[float, float] = (1.0, 1.0),
                  wheel_base: float | None = None, speed: float = 0.5,
                  timeout: float = 200.0) -> np.ndarray:
     """Drive one UMBmark square on ``sim`` (a SimBase) by its odometry; return its error.
 
-    The odometry starts at the true pose, so the return error ``true - odometric``
-    (start frame) is what the odometry got wrong; the controller's own stopping
-    error cancels out.
+    The return error ``true - odometric`` end (start frame, ``[x, y, theta]``) is what
+    the odometry got wrong; the controller's own stopping error cancels out. See
+    :func:`run_square` for the whole run.
     """
-    start = sim.pose
-    odometry = Odometry(sim.params, correction=correction, wheel_base=wheel_base, start=start)
-    driver = SquareDriver(odometry, side, direction, speed)
-    elapsed = 0.0
-    while not driver.done:
-        if elapsed > timeout:
-            raise RuntimeError(f"{direction} square not finished in {timeout} s")
-        sim.run(driver, 5.0)
-        elapsed += 5.0
-    sim.run(driver, 1.0)  # done: it sends zero; let the wheels stop before measuring
-    odometry.update_frame(sim.frame)
-    return return_error(start, sim.pose, odometry.pose)
+    run = run_square(sim, direction, side, correction, wheel_base, speed, timeout=timeout)
+    if run.true_end is None:
+        raise ValueError("drive_square needs a body with ground truth (the simulator); "
+                         "use run_square on the real chair")
+    return run.error
 
 
 def run_umbmark(make_sim: Callable[[int], object], runs: int = 5, side: float = THESIS_SIDE,

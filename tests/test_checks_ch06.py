@@ -1,0 +1,181 @@
+"""The exercise checks of chapter 06, wheel odometry.
+
+Each check must pass a correct answer (the library's and one written independently),
+and report "not yet" (never raise) for a wrong one and for an exercise that is not
+written yet.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from abcwc.checks import NOT_YET, PASS, ch06
+from abcwc.estimation import integrate_odometry
+from abcwc.types import Pose2D
+
+
+def not_written(*args):
+    # YOUR CODE HERE
+    raise NotImplementedError("exercise: replace these lines with your code")
+
+
+def assert_pass(result, capsys) -> None:
+    out = capsys.readouterr().out
+    assert result.passed, result.line
+    assert out.startswith(PASS) and out.count("\n") == 1
+
+
+def assert_not_yet(result, capsys, *fragments: str) -> None:
+    out = capsys.readouterr().out
+    assert not result.passed
+    assert out.startswith(NOT_YET) and out.count("\n") == 1
+    for fragment in fragments:
+        assert fragment in out, out
+
+
+@pytest.mark.parametrize("check", [ch06.wheel_travel_check, ch06.odometry_step_check,
+                                   ch06.integrate_arcs_check])
+def test_not_written_is_not_yet(check, capsys):
+    assert_not_yet(check(not_written), capsys, "not written yet")
+
+
+# --- exercise 1: wheel travel ---------------------------------------------------------
+
+
+def modular_travel(ticks, distance_per_count, bits=32):
+    """Written from the text: differences modulo 2**bits, centred on 0."""
+    half = 2 ** (bits - 1)
+    deltas = (np.diff(np.asarray(ticks, dtype=np.int64), axis=0) + half) % (2 * half) - half
+    return deltas * distance_per_count
+
+
+@pytest.mark.parametrize("fn", [ch06.reference_wheel_travel, modular_travel])
+def test_wheel_travel_passes(fn, capsys):
+    assert_pass(ch06.wheel_travel_check(fn), capsys)
+
+
+def test_wheel_travel_without_the_wrap_is_not_yet(capsys):
+    result = ch06.wheel_travel_check(lambda t, d, bits: np.diff(t, axis=0) * d)
+    assert_not_yet(result, capsys, "16-bit", "modulo 2**16")
+
+
+def test_wheel_travel_one_row_too_many_is_not_yet(capsys):
+    result = ch06.wheel_travel_check(
+        lambda t, d, bits: modular_travel(np.vstack([t[:1], t]), d, bits))
+    assert_not_yet(result, capsys, "shape (5, 2), expected (4, 2)", "N - 1")
+
+
+def test_wheel_travel_with_the_wheels_swapped_is_not_yet(capsys):
+    result = ch06.wheel_travel_check(lambda t, d, bits: modular_travel(t, d, bits)[:, ::-1])
+    assert_not_yet(result, capsys, "hand-worked", "gave")
+
+
+# --- exercise 2: one step -------------------------------------------------------------
+
+
+def eqns_6_to_10(pose, d_left, d_right, wheel_base):
+    """Written from eqns 6-10, returning a tuple."""
+    d_c = (d_right + d_left) / 2
+    phi = (d_right - d_left) / wheel_base
+    theta = math.atan2(math.sin(pose.theta + phi), math.cos(pose.theta + phi))
+    return (pose.x + d_c * math.cos(pose.theta), pose.y + d_c * math.sin(pose.theta), theta)
+
+
+@pytest.mark.parametrize("fn", [ch06.reference_odometry_step, eqns_6_to_10])
+def test_odometry_step_passes(fn, capsys):
+    assert_pass(ch06.odometry_step_check(fn), capsys)
+
+
+def test_odometry_step_like_a9_is_not_yet(capsys):
+    def a9(pose, d_left, d_right, b):
+        theta = pose.theta + (d_right - d_left) / b
+        d_c = (d_left + d_right) / 2
+        return Pose2D(pose.x + d_c * math.cos(theta), pose.y + d_c * math.sin(theta),
+                      math.remainder(theta, 2 * math.pi))
+
+    assert_not_yet(ch06.odometry_step_check(a9), capsys, "after the turn", "A.9")
+
+
+def test_odometry_step_with_left_and_right_swapped_is_not_yet(capsys):
+    result = ch06.odometry_step_check(lambda p, left, right, b: eqns_6_to_10(p, right, left, b))
+    assert_not_yet(result, capsys, "wrong way")
+
+
+def test_odometry_step_without_wrap_is_not_yet(capsys):
+    def unwrapped(pose, d_left, d_right, b):
+        x, y, _ = eqns_6_to_10(pose, d_left, d_right, b)
+        return x, y, pose.theta + (d_right - d_left) / b
+
+    assert_not_yet(ch06.odometry_step_check(unwrapped), capsys, "past +pi", "wrap")
+
+
+def test_odometry_step_midpoint_is_not_yet(capsys):
+    result = ch06.odometry_step_check(
+        lambda p, left, right, b: ch06.reference_odometry_step(p, left, right, b, "midpoint"))
+    assert_not_yet(result, capsys, "theta + phi/2", "as printed")
+
+
+def test_odometry_step_returning_nothing_is_not_yet(capsys):
+    assert_not_yet(ch06.odometry_step_check(lambda *args: None), capsys,
+                   "expected a Pose2D")
+
+
+# --- exercise 3: the whole log --------------------------------------------------------
+
+
+def arcs_step_by_step(d_left, d_right, wheel_base, start):
+    """A loop of exact-arc steps: slow, but the same answer."""
+    poses = [start]
+    for left, right in zip(d_left, d_right):
+        d_c, phi = (left + right) / 2, (right - left) / wheel_base
+        p = poses[-1]
+        length = d_c if phi == 0 else d_c * math.sin(phi / 2) / (phi / 2)
+        heading = p.theta + phi / 2
+        poses.append(Pose2D(p.x + length * math.cos(heading), p.y + length * math.sin(heading),
+                            math.atan2(math.sin(p.theta + phi), math.cos(p.theta + phi))))
+    return np.array([p.as_array() for p in poses])
+
+
+@pytest.mark.parametrize("fn", [ch06.reference_integrate_arcs, arcs_step_by_step])
+def test_integrate_arcs_passes(fn, capsys):
+    assert_pass(ch06.integrate_arcs_check(fn), capsys)
+
+
+@pytest.mark.parametrize("method, fragment", [("euler", "heading before its step"),
+                                              ("midpoint", "sin(phi/2)/(phi/2)")])
+def test_integrate_arcs_other_methods_are_not_yet(method, fragment, capsys):
+    result = ch06.integrate_arcs_check(
+        lambda left, right, b, s: integrate_odometry(left, right, b, s, method))
+    assert_not_yet(result, capsys, fragment)
+
+
+def test_integrate_arcs_dividing_by_zero_is_not_yet(capsys):
+    def naive(d_left, d_right, b, start):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            phi = (d_right - d_left) / b
+            length = (d_left + d_right) / 2 * np.sin(phi / 2) / (phi / 2)
+        theta = start.theta + np.concatenate([[0.0], np.cumsum(phi)])
+        heading = theta[:-1] + phi / 2
+        x = start.x + np.concatenate([[0.0], np.cumsum(length * np.cos(heading))])
+        y = start.y + np.concatenate([[0.0], np.cumsum(length * np.sin(heading))])
+        return np.column_stack([x, y, np.angle(np.exp(1j * theta))])
+
+    assert_not_yet(ch06.integrate_arcs_check(naive), capsys, "straight line", "np.sinc")
+
+
+def test_integrate_arcs_unwrapped_is_not_yet(capsys):
+    def unwrapped(d_left, d_right, b, start):
+        poses = ch06.reference_integrate_arcs(d_left, d_right, b, start)
+        poses[:, 2] = start.theta + np.concatenate([[0.0], np.cumsum((d_right - d_left) / b)])
+        return poses
+
+    assert_not_yet(ch06.integrate_arcs_check(unwrapped), capsys, "on the spot", "wrap")
+
+
+def test_integrate_arcs_without_the_start_row_is_not_yet(capsys):
+    result = ch06.integrate_arcs_check(
+        lambda *args: ch06.reference_integrate_arcs(*args)[1:])
+    assert_not_yet(result, capsys, "shape (50, 3), expected (51, 3)", "N + 1 poses")

@@ -1,0 +1,221 @@
+"""The exercise checks of chapter 07 (going to a landmark).
+
+Each check must pass a correct answer, and report "not yet" (never raise) for a wrong
+one and for an exercise that is not written yet.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from abcwc.behaviours import landmark
+from abcwc.checks import NOT_YET, PASS, ch07
+from abcwc.types import Twist
+
+
+def not_written(*args, **kwargs):
+    # YOUR CODE HERE
+    raise NotImplementedError("exercise: replace these lines with your code")
+
+
+def assert_pass(result, capsys) -> None:
+    out = capsys.readouterr().out
+    assert result.passed, result.line
+    assert out.startswith(PASS) and out.count("\n") == 1
+
+
+def assert_not_yet(result, capsys, *fragments: str) -> None:
+    out = capsys.readouterr().out
+    assert not result.passed
+    assert out.startswith(NOT_YET) and out.count("\n") == 1
+    for fragment in fragments:
+        assert fragment in out, out
+
+
+# --- exercise 1: distance and bearing --------------------------------------------------
+
+
+def numpy_bearing(pose, goal):
+    """A correct answer written differently: NumPy, wrapping with the modulo."""
+    d = np.array(goal) - np.array([pose.x, pose.y])
+    alpha = (np.arctan2(d[1], d[0]) - pose.theta + np.pi) % (2 * np.pi) - np.pi
+    return np.linalg.norm(d), alpha
+
+
+@pytest.mark.parametrize("fn", [landmark.distance_and_bearing, numpy_bearing])
+def test_bearing_passes_eqns_11_12(fn, capsys):
+    assert_pass(ch07.distance_and_bearing_check(fn), capsys)
+
+
+def test_bearing_hand_worked_values():
+    from abcwc.types import Pose2D
+
+    rho, alpha = ch07.reference_distance_and_bearing(Pose2D(1.0, 2.0, 0.0), (4.0, 6.0))
+    assert (rho, alpha) == pytest.approx((5.0, math.atan2(4.0, 3.0)))
+    rho, alpha = ch07.reference_distance_and_bearing(Pose2D(0.0, 0.0, 3.0), (-1.0, -0.1))
+    assert alpha == pytest.approx(math.atan2(-0.1, -1.0) - 3.0 + 2 * math.pi)
+
+
+def test_bearing_without_the_wrap_is_not_yet(capsys):
+    def unwrapped(pose, goal):
+        dx, dy = goal[0] - pose.x, goal[1] - pose.y
+        return math.hypot(dx, dy), math.atan2(dy, dx) - pose.theta
+
+    result = ch07.distance_and_bearing_check(unwrapped)
+    assert_not_yet(result, capsys, "outside (-pi, pi]", "wrap it to 0.241261")
+
+
+def test_bearing_with_eqn_11_as_printed_is_not_yet(capsys):
+    def as_printed(pose, goal):
+        rho, alpha = landmark.distance_and_bearing(pose, goal)
+        return math.sqrt((goal[0] - pose.x) ** 2 + (goal[1] - goal[1]) ** 2), alpha
+
+    assert_not_yet(ch07.distance_and_bearing_check(as_printed), capsys, "y_d - y_d")
+
+
+def test_bearing_with_atan2_arguments_swapped_is_not_yet(capsys):
+    def swapped(pose, goal):
+        dx, dy = goal[0] - pose.x, goal[1] - pose.y
+        return math.hypot(dx, dy), landmark.wrap_angle(math.atan2(dx, dy) - pose.theta)
+
+    assert_not_yet(ch07.distance_and_bearing_check(swapped), capsys, "alpha gave",
+                   "3-4-5 triangle")
+
+
+def test_bearing_in_degrees_is_not_yet(capsys):
+    def degrees(pose, goal):
+        rho, alpha = landmark.distance_and_bearing(pose, goal)
+        return rho, math.degrees(alpha)
+
+    assert_not_yet(ch07.distance_and_bearing_check(degrees), capsys, "53.1301 rad")
+
+
+def test_bearing_returning_one_number_is_not_yet(capsys):
+    result = ch07.distance_and_bearing_check(lambda pose, goal: 5.0)
+    assert_not_yet(result, capsys, "expected a pair (rho, alpha)")
+
+
+def test_bearing_not_written(capsys):
+    assert_not_yet(ch07.distance_and_bearing_check(not_written), capsys, "not written yet")
+
+
+# --- exercise 2: turn then drive ---------------------------------------------------------
+
+
+def student_machine(state, rho, alpha, tolerance=0.5, heading_tolerance=0.3,
+                    align_tolerance=0.1, speed=0.5, turn_rate=0.5):
+    """A correct answer written differently."""
+    if state == "reached" or rho <= tolerance:
+        return "reached", Twist(0.0, 0.0)
+    off = align_tolerance if state == "turn" else heading_tolerance
+    if abs(alpha) <= off:
+        return "drive", Twist(speed, 0.0)
+    return "turn", Twist(0.0, turn_rate if alpha > 0 else -turn_rate)
+
+
+@pytest.mark.parametrize("fn", [landmark.turn_then_drive, student_machine])
+def test_machine_passes(fn, capsys):
+    assert_pass(ch07.turn_then_drive_check(fn), capsys)
+
+
+def test_machine_hand_worked_values():
+    settings = ch07.THESIS_MACHINE
+    state, twist = ch07.reference_turn_then_drive("turn", 2.0, 0.2, **settings)
+    assert (state, twist) == ("turn", Twist(0.0, 0.5))
+    state, twist = ch07.reference_turn_then_drive("drive", 2.0, 0.2, **settings)
+    assert (state, twist) == ("drive", Twist(0.5, 0.0))
+    state, twist = ch07.reference_turn_then_drive("drive", 2.0, -0.35, **settings)
+    assert (state, twist) == ("turn", Twist(0.0, -0.5))
+    assert ch07.reference_turn_then_drive("reached", 5.0, 1.0, **settings)[0] == "reached"
+
+
+def test_machine_without_hysteresis_is_not_yet(capsys):
+    def one_threshold(state, rho, alpha, **settings):
+        settings["align_tolerance"] = settings["heading_tolerance"]
+        return student_machine(state, rho, alpha, **settings)
+
+    assert_not_yet(ch07.turn_then_drive_check(one_threshold), capsys,
+                   "state gave 'drive', expected 'turn'", "align_tolerance")
+
+
+def test_machine_with_a10s_turn_directions_is_not_yet(capsys):
+    def away(state, rho, alpha, **settings):
+        state, twist = student_machine(state, rho, alpha, **settings)
+        return state, Twist(twist.v, -twist.w)
+
+    assert_not_yet(ch07.turn_then_drive_check(away), capsys, "positive w turns left")
+
+
+def test_machine_that_forgets_it_arrived_is_not_yet(capsys):
+    def no_latch(state, rho, alpha, **settings):
+        return student_machine("turn" if state == "reached" else state, rho, alpha,
+                               **settings)
+
+    assert_not_yet(ch07.turn_then_drive_check(no_latch), capsys, "for good")
+
+
+def test_machine_returning_bare_numbers_is_not_yet(capsys):
+    def numbers(state, rho, alpha, **settings):
+        state, twist = student_machine(state, rho, alpha, **settings)
+        return state, twist.v, twist.w
+
+    assert_not_yet(ch07.turn_then_drive_check(numbers), capsys, "expected (state, Twist")
+
+
+def test_machine_not_written(capsys):
+    assert_not_yet(ch07.turn_then_drive_check(not_written), capsys, "not written yet")
+
+
+# --- exercise 3: the proportional law ---------------------------------------------------
+
+
+def student_law(rho, alpha, k_rho=0.8, k_alpha=1.5, max_speed=0.8, max_turn_rate=0.8,
+                decel=0.5):
+    """A correct answer written differently (NumPy clip)."""
+    w = float(np.clip(k_alpha * alpha, -max_turn_rate, max_turn_rate))
+    v = min(k_rho * rho, max_speed, (2 * decel * rho) ** 0.5)
+    return Twist(v * np.cos(alpha) if np.cos(alpha) > 0 else 0.0, w)
+
+
+@pytest.mark.parametrize("fn", [landmark.proportional_command, student_law])
+def test_law_passes(fn, capsys):
+    assert_pass(ch07.proportional_command_check(fn), capsys)
+
+
+def test_law_hand_worked_values():
+    twist = ch07.reference_proportional_command(2.0, 0.2)
+    assert twist.v == pytest.approx(0.8 * math.cos(0.2)) and twist.w == pytest.approx(0.3)
+    assert ch07.reference_proportional_command(0.3, 0.0).v == pytest.approx(0.24)
+    assert ch07.reference_proportional_command(0.5, 0.0, k_rho=2.0).v == pytest.approx(
+        math.sqrt(0.5))
+    assert ch07.reference_proportional_command(2.0, 2.0).v == 0.0
+
+
+def test_law_that_reverses_towards_a_goal_behind_is_not_yet(capsys):
+    def reverses(rho, alpha, **gains):
+        twist = student_law(rho, 0.0, **gains)
+        return Twist(twist.v * math.cos(alpha), student_law(rho, alpha, **gains).w)
+
+    assert_not_yet(ch07.proportional_command_check(reverses), capsys, "goal behind")
+
+
+def test_law_without_the_turn_limit_is_not_yet(capsys):
+    def unclipped(rho, alpha, **gains):
+        return Twist(student_law(rho, alpha, **gains).v, gains["k_alpha"] * alpha)
+
+    assert_not_yet(ch07.proportional_command_check(unclipped), capsys, "max_turn_rate")
+
+
+def test_law_without_the_braking_limit_is_not_yet(capsys):
+    def no_brake(rho, alpha, **gains):
+        gains["decel"] = 1e6
+        return student_law(rho, alpha, **gains)
+
+    assert_not_yet(ch07.proportional_command_check(no_brake), capsys, "braking limit")
+
+
+def test_law_not_written(capsys):
+    assert_not_yet(ch07.proportional_command_check(not_written), capsys, "not written yet")

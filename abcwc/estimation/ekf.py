@@ -44,11 +44,19 @@ starts at ``t_k``) and any fix taken at ``t_k``.
 
 **Noise from the models, not guessed** (:func:`noise_from_models`):
 
-* wheels: count quantisation, ``d / sqrt(6)`` per wheel and period for a distance per
-  count ``d`` (each increment is the difference of two floors of a uniformly spread
-  remainder: variance ``2 / 12`` counts squared), plus a relative part for the tyres'
-  random slip and the systematic error UMBmark leaves (``E_max,syst / (4 L)`` of a
-  corrected square, per metre driven);
+* wheels: three errors of different kinds, each made white over the filter's horizon
+  ``T`` (the time between absolute fixes, ``N = T / dt`` periods), so that its sum over
+  ``N`` periods, which is what moves the pose, has the right size:
+
+  - count quantisation: ``d / sqrt(6)`` per wheel and period for a distance per count
+    ``d`` (each increment is the difference of two floors of a uniformly spread
+    remainder: variance ``2 / 12`` counts squared). The increments' errors telescope:
+    over ``N`` periods they add up to one such difference, not ``sqrt(N)`` of them, so
+    the per-period figure is divided by ``sqrt(N)``;
+  - the systematic error UMBmark leaves, ``r = E_max,syst / (4 L)`` of a corrected
+    square: the same sign in every period, so over ``N`` periods it grows as ``N r``,
+    not ``sqrt(N) r``: the per-period figure is ``r sqrt(N)``;
+  - the tyres' random slip, independent from period to period: white as it is;
 * gyro: the sensor model's white noise per sample (``noise_std``) and its bias walk
   ``q_b = bias_walk_std`` (rad/s per sqrt(s)); the simulator's gyro
   (:class:`abcwc.sim.sensors.Gyro`, ``data/chair.toml``) is exactly this model
@@ -155,9 +163,9 @@ class EkfNoise:
 
     accel: float = 0.5  # m/s^2, white linear acceleration
     ang_accel: float = 1.0  # rad/s^2, white angular acceleration
-    wheel_v: float = 0.007  # m/s, count quantisation over one period
-    wheel_w: float = 0.032  # rad/s
-    wheel_rel: float = 0.0036  # relative: slip + residual systematic error
+    wheel_v: float = 0.0003  # m/s, count quantisation, white over a 10 s horizon
+    wheel_w: float = 0.0014  # rad/s
+    wheel_rel: float = 0.045  # relative: slip + residual systematic error (10 s horizon)
     gyro: float = 0.003  # rad/s, white noise per sample
     bias_walk: float = 0.0001  # rad/s per sqrt(s), the bias's random walk
 
@@ -190,24 +198,28 @@ def _process(accel: float, ang_accel: float, bias_walk: float, dt: float) -> np.
 
 
 def noise_from_models(params: ChairParams | None = None, slip_std: float = 0.003,
-                      residual_rel: float = 0.002) -> EkfNoise:
+                      residual_rel: float = 0.002, horizon: float = 10.0) -> EkfNoise:
     """Noise from the sensor models (see the module docstring for the derivation).
 
     ``slip_std`` is the per-wheel per-period relative slip (the simulated worn chair's,
-    :meth:`abcwc.sim.motor.ChairErrors.worn`) and ``residual_rel`` the relative
-    odometry error UMBmark leaves (``E_max,syst / (4 L)`` of a corrected square).
-    The gyro's white noise and bias walk come from ``params.gyro``.
+    :meth:`abcwc.sim.motor.ChairErrors.worn`), ``residual_rel`` the relative odometry
+    error UMBmark leaves (``E_max,syst / (4 L)`` of a corrected square) and ``horizon``
+    (s) the time over which the filter leans on the wheels alone: the interval between
+    absolute fixes. Quantisation (which telescopes) and the residual (which keeps its
+    sign) are made white over that horizon. The gyro's white noise and bias walk come
+    from ``params.gyro``.
     """
-    if not (slip_std >= 0 and residual_rel >= 0):
-        raise ValueError(f"slip_std and residual_rel must be >= 0, "
-                         f"got {slip_std!r}, {residual_rel!r}")
+    if not (slip_std >= 0 and residual_rel >= 0 and horizon > 0):
+        raise ValueError(f"slip_std and residual_rel must be >= 0 and horizon > 0 s, "
+                         f"got {slip_std!r}, {residual_rel!r}, {horizon!r}")
     p = params or default_params()
     dt = p.control_period
-    per_wheel = p.distance_per_count / math.sqrt(6)
+    periods = max(horizon / dt, 1.0)
+    per_wheel = p.distance_per_count / math.sqrt(6) / math.sqrt(periods)
     return EkfNoise(
         wheel_v=per_wheel / math.sqrt(2) / dt,
         wheel_w=per_wheel * math.sqrt(2) / p.wheel_base / dt,
-        wheel_rel=math.hypot(slip_std, residual_rel),
+        wheel_rel=math.hypot(slip_std, residual_rel * math.sqrt(periods)),
         gyro=p.gyro.noise_std,
         bias_walk=p.gyro.bias_walk_std,
     )

@@ -223,7 +223,11 @@ class SimBase:
         self.encoders.advance(*self._surface_speeds, dt)
         motion = self.motors.advance(pots)
         self._surface_speeds = (motion.surface_left, motion.surface_right)
-        theta = self.chair.angle
+        # The velocity set now moves the chair in the next step, after this step has
+        # turned it by its present rate; aim it along the chord of that next step's arc,
+        # half-way through its turn, so the true path is an arc (as a real chair's)
+        # rather than a polygon of chords along a lagging heading.
+        theta = self.chair.angle + self.chair.angular_velocity * dt + motion.w * dt / 2
         self._control.velocity = (motion.v * math.cos(theta), motion.v * math.sin(theta))
         self._control.angular_velocity = motion.w
         sub = dt / PHYSICS_SUBSTEPS

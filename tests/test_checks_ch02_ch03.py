@@ -10,31 +10,12 @@ import math
 
 import pytest
 
-from abcwc.checks import NOT_YET, PASS, ch02, ch03
+from abcwc.checks import ch02, ch03
 from abcwc.control import turn_value, twist_to_pot_command
 from abcwc.navigation import SonarAvoider
 from abcwc.params import default_params
 from abcwc.types import PotCommand, Twist
-
-
-def not_written(*args):
-    # YOUR CODE HERE
-    raise NotImplementedError("exercise: replace these lines with your code")
-
-
-def assert_pass(result, capsys) -> None:
-    out = capsys.readouterr().out
-    assert result.passed, result.line
-    assert out.startswith(PASS) and out.count("\n") == 1
-
-
-def assert_not_yet(result, capsys, *fragments: str) -> None:
-    out = capsys.readouterr().out
-    assert not result.passed
-    assert out.startswith(NOT_YET) and out.count("\n") == 1
-    for fragment in fragments:
-        assert fragment in out, out
-
+from tests.check_helpers import assert_not_yet, assert_pass, not_written
 
 # --- chapter 02: eqn 2 ----------------------------------------------------------------
 

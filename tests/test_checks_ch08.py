@@ -11,28 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from abcwc.checks import NOT_YET, PASS, ch08
+from abcwc.checks import ch08
 from abcwc.estimation.umbmark import load_thesis_trials
-
-
-def not_written(*args):
-    # YOUR CODE HERE
-    raise NotImplementedError("exercise: replace these lines with your code")
-
-
-def assert_pass(result, capsys) -> None:
-    out = capsys.readouterr().out
-    assert result.passed, result.line
-    assert out.startswith(PASS) and out.count("\n") == 1
-
-
-def assert_not_yet(result, capsys, *fragments: str) -> None:
-    out = capsys.readouterr().out
-    assert not result.passed
-    assert out.startswith(NOT_YET) and out.count("\n") == 1
-    for fragment in fragments:
-        assert fragment in out, out
-
+from tests.check_helpers import assert_not_yet, assert_pass, not_written
 
 # --- independent student answers --------------------------------------------------------
 

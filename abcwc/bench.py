@@ -6,6 +6,7 @@ command prints one table (or JSON) of their medians over ``repeats`` runs.
 
 from __future__ import annotations
 
+import functools
 import json
 import statistics
 import time
@@ -57,6 +58,27 @@ def bench_ekf() -> dict[str, float]:
     return measure()
 
 
+@functools.lru_cache(maxsize=1)
+def _nees_50_runs() -> dict[str, float]:
+    import os
+
+    from abcwc.estimation.consistency import ekf_monte_carlo
+
+    result = ekf_monte_carlo(50, 300.0, processes=min(os.cpu_count() or 1, 4))
+    ekf = [run.ekf_final_error for run in result.runs]
+    odometry = [run.odometry_final_error for run in result.runs]
+    return {"average NEES, 50 runs x 300 s": result.average_nees,
+            "95 % band low": result.band[0], "95 % band high": result.band[1],
+            "EKF final error, mean (m)": statistics.fmean(ekf),
+            "raw odometry final error, mean (m)": statistics.fmean(odometry)}
+
+
+@benchmark("nees", "EKF consistency: 50 seeded 5-minute floor drives (deterministic, "
+                   "computed once)")
+def bench_nees() -> dict[str, float]:
+    return _nees_50_runs()
+
+
 _NOTEBOOK_RUNNER = """
 import resource, sys, time
 import nbformat
@@ -103,9 +125,14 @@ def run_benchmarks(names: list[str] | None = None, repeats: int = 3) -> dict[str
     return results
 
 
+def _figure(value: float) -> str:
+    """Large figures with one decimal and thousands separators; small ones to 4 digits."""
+    return f"{value:,.1f}" if abs(value) >= 100 else f"{value:.4g}"
+
+
 def format_table(results: dict[str, dict]) -> str:
     """The results as an aligned text table."""
-    rows = [(name, key, f"{value:,.1f}") for name, figures in results.items()
+    rows = [(name, key, _figure(value)) for name, figures in results.items()
             for key, value in figures.items()]
     widths = [max(len(r[i]) for r in rows + [("benchmark", "figure", "median")])
               for i in range(3)]

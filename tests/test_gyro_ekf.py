@@ -16,64 +16,38 @@ from abcwc.estimation import (
     ChairEkf,
     EkfNoise,
     absolute_fixes,
-    calibrate_distance_scale,
-    e_max_syst,
     estimate_gyro_bias,
     gyro_bias_prior,
     gyro_odometry_from_log,
     kalman_update,
-    nees,
     nees_band,
     noise_from_models,
     odometry_from_log,
     run_ekf,
-    run_umbmark,
-    umbmark_corrections,
 )
 from abcwc.estimation.bench import bench_ekf
+from abcwc.estimation.consistency import FIX_STD, calibrate_worn_chair, ekf_monte_carlo, ekf_run
 from abcwc.estimation.ekf import BIAS, H_GYRO, motion, motion_jacobian
 from abcwc.sim.base import SimBase
 from abcwc.types import Pose2D, SensorFrame, Twist
 from tests.conftest import box_world
 
 OPEN = box_world(20, 20, centred=True)
-FIX_STD = (0.05, 0.05, 0.02)  # m, m, rad: an occasional landmark sighting
-FIX_EVERY = 10.0  # s
 
 
 @pytest.fixture(scope="module")
 def calibration():
-    """UMBmark (one square each way) plus a straight-line scale, on the worn chair; then
-    the corrected squares again: what they still miss per metre sets the odometry's
-    residual relative error (``E_max,syst / 4 L``)."""
+    """UMBmark and a distance scale on the worn chair, and the residual they leave."""
+    return calibrate_worn_chair()
 
-    def make(seed):
-        return SimBase(OPEN, seed=seed, errors="worn", people=False)
-
-    cw, ccw = run_umbmark(make, runs=1)
-    result = umbmark_corrections(cw, ccw, 3.5, 0.44)
-    scale = calibrate_distance_scale(make(99), correction=result.correction)
-    correction = (result.c_left * scale, result.c_right * scale)
-    wheel_base = result.wheel_base * scale
-    cw, ccw = run_umbmark(make, runs=1, correction=correction, wheel_base=wheel_base)
-    return correction, wheel_base, e_max_syst(cw, ccw) / (4 * 3.5)
-
-
-def _drive(seed, seconds):
-    """Stand still 2 s (the bias prior), then the floor world's mixed drive."""
-    sim = SimBase("floor", seed=seed, errors="worn", people=False)
-    prior = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), 2.0).gyro_z)
-    log = sim.run(FollowWaypoints(floor_mixed_drive()), seconds)
-    assert log.collisions[-1] == 0
-    return sim, log, prior
 
 
 def _filter(log, prior, calibration, seed, **options):
-    correction, wheel_base, residual = calibration
-    ekf = ChairEkf(Pose2D(*log.pose[0]), correction=correction, wheel_base=wheel_base,
-                   gyro_bias=prior[0], gyro_bias_std=prior[1],
-                   noise=noise_from_models(residual_rel=residual), **options)
-    fixes = absolute_fixes(log, FIX_EVERY, FIX_STD, seed=seed)
+    ekf = ChairEkf(Pose2D(*log.pose[0]), correction=calibration.correction,
+                   wheel_base=calibration.wheel_base, gyro_bias=prior[0],
+                   gyro_bias_std=prior[1],
+                   noise=noise_from_models(residual_rel=calibration.residual_rel), **options)
+    fixes = absolute_fixes(log, 10.0, FIX_STD, seed=seed)
     return run_ekf(log, ekf, fixes, np.diag(np.square(FIX_STD)))
 
 
@@ -163,25 +137,18 @@ def test_bad_filter_settings_are_refused():
 
 # --------------------------------------------------------------------- on the floor world
 def test_ekf_final_error_at_most_half_the_raw_odometry_on_a_five_minute_drive(calibration):
-    _, log, prior = _drive(0, 300.0)
-    states, _ = _filter(log, prior, calibration, seed=0)
-    raw = odometry_from_log(log)
-    ekf_error = math.hypot(*(states[-1, :2] - log.pose[-1, :2]))
-    odo_error = math.hypot(*(raw[-1, :2] - log.pose[-1, :2]))
-    assert ekf_error <= 0.5 * odo_error, (ekf_error, odo_error)
+    run = ekf_run(0, 300.0, calibration)
+    assert run.ekf_final_error <= 0.5 * run.odometry_final_error, run
 
 
 def test_ekf_average_nees_inside_the_chi_square_band(calibration):
-    # 10 x 60 s here; 50 x 300 s (the issue's figure) by hand, see the module docstring
-    runs, seconds = 10, 60.0
-    values = []
-    for seed in range(runs):
-        _, log, prior = _drive(seed, seconds)
-        states, covs = _filter(log, prior, calibration, seed)
-        values.append(nees(log.pose, states, covs))
-    average = np.mean(values, axis=0)  # over runs, at every time step
-    low, high = nees_band(runs, dof=3)
-    assert low < average.mean() < high, (average.mean(), low, high)
+    # 10 x 60 s here; the issue's 50 x 300 s is `abcwc bench nees` (about a minute)
+    result = ekf_monte_carlo(10, 60.0, calibration)
+    assert result.band == nees_band(10, dof=3)
+    assert result.inside_band, result.summary()
+    assert all(run.ekf_final_error < 0.5 * run.odometry_final_error for run in result.runs)
+    with pytest.raises(ValueError, match="runs must be"):
+        ekf_monte_carlo(0, 60.0, calibration)
 
 
 def test_bias_state_converges_to_the_simulators_gyro_bias(calibration):

@@ -1,0 +1,166 @@
+"""Is the EKF honest? Seeded Monte Carlo runs on the floor world, scored by the NEES.
+
+The experiment behind issue-level figures and tests (Bar-Shalom, Li and Kirubarajan,
+*Estimation with Applications to Tracking and Navigation*, 2001, ch. 5.4):
+
+1. :func:`calibrate_worn_chair`: UMBmark (one square each way, Borenstein and Feng 1996)
+   plus a straight-line scale on the worn chair in an open hall, then the corrected
+   squares again; what they still miss per metre, ``E_max,syst / (4 L)``, is the
+   odometry's residual relative error that :func:`~abcwc.estimation.ekf.noise_from_models`
+   needs.
+2. :func:`ekf_run`: one seed: stand still 2 s (the gyro-bias prior), drive the floor
+   world's mixed route (:func:`abcwc.behaviours.floor_mixed_drive`, steered by ground
+   truth so no estimator changes the path), and filter the log with a landmark fix every
+   ``fix_every`` seconds.
+3. :func:`ekf_monte_carlo`: many seeds (in parallel processes if asked); the NEES
+   averaged over runs at every step, its mean over time, and the two-sided 95 %
+   chi-square band for that many runs (:func:`~abcwc.estimation.ekf.nees_band`).
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from abcwc.estimation.ekf import (
+    ChairEkf,
+    absolute_fixes,
+    gyro_bias_prior,
+    nees,
+    nees_band,
+    noise_from_models,
+    run_ekf,
+)
+from abcwc.estimation.odometry import odometry_from_log
+from abcwc.estimation.umbmark import (
+    THESIS_SIDE,
+    calibrate_distance_scale,
+    e_max_syst,
+    run_umbmark,
+    umbmark_corrections,
+)
+from abcwc.types import Pose2D, Twist
+
+FIX_STD = (0.05, 0.05, 0.02)
+"""m, m, rad: how good one landmark sighting is."""
+STILL_SECONDS = 2.0
+"""Standing still before each drive: the gyro-bias prior."""
+HALL_SIZE = 20.0
+"""m: the open square hall the UMBmark squares are driven in."""
+
+
+@dataclass(frozen=True)
+class OdometryCalibration:
+    """UMBmark's result for the EKF: wheel factors, wheel base (m), residual (per metre)."""
+
+    correction: tuple[float, float]
+    wheel_base: float
+    residual_rel: float
+
+
+@dataclass(frozen=True)
+class EkfRun:
+    """One seeded drive: the NEES at every step and both final position errors (m)."""
+
+    nees: np.ndarray
+    ekf_final_error: float
+    odometry_final_error: float
+
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    """Many seeded drives, and the NEES band they are judged by."""
+
+    runs: tuple[EkfRun, ...]
+    seconds: float
+    band: tuple[float, float]
+
+    @property
+    def average_nees(self) -> float:
+        """The NEES averaged over runs at each step, then over time."""
+        return float(np.mean([run.nees for run in self.runs], axis=0).mean())
+
+    @property
+    def inside_band(self) -> bool:
+        low, high = self.band
+        return low < self.average_nees < high
+
+    def summary(self) -> str:
+        ekf = np.array([run.ekf_final_error for run in self.runs])
+        odo = np.array([run.odometry_final_error for run in self.runs])
+        low, high = self.band
+        return (f"{len(self.runs)} runs x {self.seconds:g} s: average NEES "
+                f"{self.average_nees:.2f}, 95 % band [{low:.2f}, {high:.2f}] "
+                f"({'inside' if self.inside_band else 'OUTSIDE'}); final error EKF mean "
+                f"{ekf.mean():.3f} m (worst {ekf.max():.3f}), raw odometry mean "
+                f"{odo.mean():.2f} m; worst EKF/odometry ratio {(ekf / odo).max():.3f}")
+
+
+def _hall():
+    from abcwc.sim.world import world_from_dict
+
+    h = HALL_SIZE / 2
+    return world_from_dict({"name": "hall", "places": {"start": [0.0, 0.0, 0.0]},
+                            "walls": [[[-h, -h], [h, -h], [h, h], [-h, h], [-h, -h]]]})
+
+
+def calibrate_worn_chair(side: float = THESIS_SIDE) -> OdometryCalibration:
+    """UMBmark + distance scale on the worn chair, and the residual they leave."""
+    from abcwc.sim.base import SimBase
+
+    hall = _hall()
+
+    def make(seed: int) -> SimBase:
+        return SimBase(hall, seed=seed, errors="worn", people=False)
+
+    cw, ccw = run_umbmark(make, runs=1, side=side)
+    result = umbmark_corrections(cw, ccw, side, make(0).params.wheel_base)
+    scale = calibrate_distance_scale(make(99), correction=result.correction)
+    correction = (result.c_left * scale, result.c_right * scale)
+    wheel_base = result.wheel_base * scale
+    cw, ccw = run_umbmark(make, runs=1, side=side, correction=correction,
+                          wheel_base=wheel_base)
+    return OdometryCalibration(correction, wheel_base, e_max_syst(cw, ccw) / (4 * side))
+
+
+def ekf_run(seed: int, seconds: float, calibration: OdometryCalibration,
+            fix_every: float = 10.0) -> EkfRun:
+    """One seeded drive on the floor world, filtered; see the module docstring."""
+    from abcwc.behaviours import FollowWaypoints, floor_mixed_drive
+    from abcwc.sim.base import SimBase
+
+    sim = SimBase("floor", seed=seed, errors="worn", people=False)
+    bias, bias_std = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), STILL_SECONDS).gyro_z)
+    log = sim.run(FollowWaypoints(floor_mixed_drive()), seconds)
+    if log.collisions[-1]:
+        raise RuntimeError(f"seed {seed}: the route touched something; the drive is void")
+    ekf = ChairEkf(Pose2D(*log.pose[0]), correction=calibration.correction,
+                   wheel_base=calibration.wheel_base, gyro_bias=bias, gyro_bias_std=bias_std,
+                   noise=noise_from_models(residual_rel=calibration.residual_rel,
+                                           horizon=fix_every))
+    fixes = absolute_fixes(log, fix_every, FIX_STD, seed=seed)
+    states, covs = run_ekf(log, ekf, fixes, np.diag(np.square(FIX_STD)))
+    raw = odometry_from_log(log)
+    return EkfRun(nees(log.pose, states, covs),
+                  math.hypot(*(states[-1, :2] - log.pose[-1, :2])),
+                  math.hypot(*(raw[-1, :2] - log.pose[-1, :2])))
+
+
+def ekf_monte_carlo(runs: int, seconds: float, calibration: OdometryCalibration | None = None,
+                    processes: int = 1, fix_every: float = 10.0) -> MonteCarloResult:
+    """Seeds ``0 .. runs - 1``, each :func:`ekf_run`; ``processes > 1`` runs them in parallel."""
+    if not (isinstance(runs, int) and runs >= 1):
+        raise ValueError(f"runs must be an integer >= 1, got {runs!r}")
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise ValueError(f"seconds must be a finite number > 0, got {seconds!r}")
+    calibration = calibration or calibrate_worn_chair()
+    args = [(seed, seconds, calibration, fix_every) for seed in range(runs)]
+    if processes > 1:
+        with ProcessPoolExecutor(processes) as pool:
+            results = list(pool.map(ekf_run, *zip(*args)))
+    else:
+        results = [ekf_run(*a) for a in args]
+    return MonteCarloResult(tuple(results), float(seconds), nees_band(runs, dof=3))

@@ -6,7 +6,6 @@ command prints one table (or JSON) of their medians over ``repeats`` runs.
 
 from __future__ import annotations
 
-import functools
 import json
 import statistics
 import time
@@ -15,14 +14,17 @@ from collections.abc import Callable
 from abcwc.types import Twist
 
 Benchmark = Callable[[], dict[str, float]]
-BENCHMARKS: dict[str, tuple[str, Benchmark]] = {}
+BENCHMARKS: dict[str, tuple[str, Benchmark, bool]] = {}
+"""name -> (description, function, whether to repeat it: False for a deterministic one)."""
 
 
-def benchmark(name: str, description: str) -> Callable[[Benchmark], Benchmark]:
-    """Register a benchmark under ``name``."""
+def benchmark(name: str, description: str,
+              repeat: bool = True) -> Callable[[Benchmark], Benchmark]:
+    """Register a benchmark under ``name``; ``repeat=False``: its figures do not vary
+    from run to run, so it runs once whatever ``repeats`` says."""
 
     def register(fn: Benchmark) -> Benchmark:
-        BENCHMARKS[name] = (description, fn)
+        BENCHMARKS[name] = (description, fn, repeat)
         return fn
 
     return register
@@ -58,8 +60,9 @@ def bench_ekf() -> dict[str, float]:
     return measure()
 
 
-@functools.lru_cache(maxsize=1)
-def _nees_50_runs() -> dict[str, float]:
+@benchmark("nees", "EKF consistency: 50 seeded 5-minute floor drives (deterministic: run once)",
+           repeat=False)
+def bench_nees() -> dict[str, float]:
     import os
 
     from abcwc.estimation.consistency import ekf_monte_carlo
@@ -71,12 +74,6 @@ def _nees_50_runs() -> dict[str, float]:
             "95 % band low": result.band[0], "95 % band high": result.band[1],
             "EKF final error, mean (m)": statistics.fmean(ekf),
             "raw odometry final error, mean (m)": statistics.fmean(odometry)}
-
-
-@benchmark("nees", "EKF consistency: 50 seeded 5-minute floor drives (deterministic, "
-                   "computed once)")
-def bench_nees() -> dict[str, float]:
-    return _nees_50_runs()
 
 
 _NOTEBOOK_RUNNER = """
@@ -119,8 +116,8 @@ def run_benchmarks(names: list[str] | None = None, repeats: int = 3) -> dict[str
         raise ValueError(f"repeats {repeats} outside 1..")
     results: dict[str, dict] = {}
     for name in names:
-        _, fn = BENCHMARKS[name]
-        runs = [fn() for _ in range(repeats)]
+        _, fn, repeat = BENCHMARKS[name]
+        runs = [fn() for _ in range(repeats if repeat else 1)]
         results[name] = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
     return results
 

@@ -1,4 +1,4 @@
-"""Shared fixtures: an ideal chair, noise-free parameters and an empty test world."""
+"""Shared fixtures: an ideal chair and noise-free parameters."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ from dataclasses import replace
 import pytest
 
 from abcwc.params import ChairParams, default_params
-from abcwc.sim.world import World, world_from_dict
 
 
 def noise_free(params: ChairParams | None = None) -> ChairParams:
@@ -21,19 +20,6 @@ def noise_free(params: ChairParams | None = None) -> ChairParams:
         depth_scan=replace(p.depth_scan, noise_std=0.0),
         gyro=replace(p.gyro, noise_std=0.0, bias_std=0.0, bias_walk_std=0.0),
     )
-
-
-def box_world(width: float = 40.0, height: float = 40.0, extra: list | None = None,
-              centred: bool = False) -> World:
-    """An empty rectangular room from (0, 0) to (width, height), start in the middle
-    facing +x; ``centred`` puts the room's middle (and the start) at the origin."""
-    x0, y0 = (-width / 2, -height / 2) if centred else (0.0, 0.0)
-    x1, y1 = x0 + width, y0 + height
-    walls = [[[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]]] + (extra or [])
-    return world_from_dict({
-        "name": "box", "walls": walls,
-        "places": {"start": [(x0 + x1) / 2, (y0 + y1) / 2, 0.0]},
-    })
 
 
 @pytest.fixture

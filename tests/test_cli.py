@@ -29,7 +29,7 @@ def test_demo_refuses_unknown_world(tmp_path):
 
 def test_bench_table_and_json(monkeypatch, capsys):
     calls = iter([{"x": 1.0}, {"x": 3.0}, {"x": 2.0}])
-    monkeypatch.setitem(bench.BENCHMARKS, "fake", ("a fake", lambda: next(calls)))
+    monkeypatch.setitem(bench.BENCHMARKS, "fake", ("a fake", lambda: next(calls), True))
     assert main(["bench", "fake", "--json", "--repeats", "3"]) == 0
     assert json.loads(capsys.readouterr().out) == {"fake": {"x": 2.0}}  # the median
     with pytest.raises(ValueError, match="unknown benchmark"):

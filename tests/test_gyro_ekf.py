@@ -15,22 +15,24 @@ from abcwc.behaviours import FollowWaypoints, GroundTruth, floor_mixed_drive
 from abcwc.estimation import (
     ChairEkf,
     EkfNoise,
-    absolute_fixes,
     estimate_gyro_bias,
     gyro_bias_prior,
     gyro_odometry_from_log,
     kalman_update,
     nees_band,
-    noise_from_models,
     odometry_from_log,
-    run_ekf,
 )
 from abcwc.estimation.bench import bench_ekf
-from abcwc.estimation.consistency import FIX_STD, calibrate_worn_chair, ekf_monte_carlo, ekf_run
+from abcwc.estimation.consistency import (
+    calibrate_worn_chair,
+    ekf_monte_carlo,
+    ekf_run,
+    filter_drive,
+)
 from abcwc.estimation.ekf import BIAS, H_GYRO, motion, motion_jacobian
 from abcwc.sim.base import SimBase
+from abcwc.sim.world import box_world
 from abcwc.types import Pose2D, SensorFrame, Twist
-from tests.conftest import box_world
 
 OPEN = box_world(20, 20, centred=True)
 
@@ -39,16 +41,6 @@ OPEN = box_world(20, 20, centred=True)
 def calibration():
     """UMBmark and a distance scale on the worn chair, and the residual they leave."""
     return calibrate_worn_chair()
-
-
-
-def _filter(log, prior, calibration, seed, **options):
-    ekf = ChairEkf(Pose2D(*log.pose[0]), correction=calibration.correction,
-                   wheel_base=calibration.wheel_base, gyro_bias=prior[0],
-                   gyro_bias_std=prior[1],
-                   noise=noise_from_models(residual_rel=calibration.residual_rel), **options)
-    fixes = absolute_fixes(log, 10.0, FIX_STD, seed=seed)
-    return run_ekf(log, ekf, fixes, np.diag(np.square(FIX_STD)))
 
 
 # --------------------------------------------------------------------- gyro
@@ -155,11 +147,11 @@ def test_bias_state_converges_to_the_simulators_gyro_bias(calibration):
     sim = SimBase("floor", seed=5, errors="worn", people=False)
     wrong = sim.gyro.bias + 0.01  # start 2 turn-on sigmas off, and say so
     log = sim.run(FollowWaypoints(floor_mixed_drive()), 120.0)
-    states, covs = _filter(log, (wrong, 0.01), calibration, seed=5)
+    states, covs = filter_drive(log, (wrong, 0.01), calibration, seed=5)
     error = abs(states[-1, BIAS] - sim.gyro.bias)  # the sim's gyro holds the truth
     assert error < 0.1 * 0.01
     assert error < 3 * math.sqrt(covs[-1, BIAS, BIAS])
-    held = _filter(log, (wrong, 0.01), calibration, seed=5, estimate_bias=False)[0]
+    held = filter_drive(log, (wrong, 0.01), calibration, seed=5, estimate_bias=False)[0]
     assert np.all(held[:, BIAS] == wrong)
 
 

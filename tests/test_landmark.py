@@ -9,11 +9,10 @@ from abcwc.behaviours import GoToLandmark, ThesisGoToLandmark, distance_and_bear
 from abcwc.behaviours.landmark import proportional_command, turn_then_drive
 from abcwc.estimation import Odometry
 from abcwc.sim.base import SimBase
-from abcwc.sim.world import world_from_dict
+from abcwc.sim.world import box_world
 from abcwc.types import Pose2D, Twist
 
-OPEN = world_from_dict({"name": "open", "places": {"start": [0, 0, 0]},
-                        "walls": [[[-10, -10], [10, -10], [10, 10], [-10, 10], [-10, -10]]]})
+OPEN = box_world(20, 20, centred=True, name="open")
 GOAL = (-2.0, 3.0)  # behind and to the left: needs a big turn first
 
 

@@ -19,8 +19,8 @@ from abcwc.estimation import (
 from abcwc.estimation.gyro import gyro_odometry_from_log
 from abcwc.params import default_params
 from abcwc.sim.base import SimBase
+from abcwc.sim.world import box_world
 from abcwc.types import Pose2D, Twist
-from tests.conftest import box_world
 
 OPEN = box_world(120, 120, centred=True)
 

@@ -10,8 +10,8 @@ import pytest
 
 from abcwc.control import InterfaceBoard
 from abcwc.sim import SimBase, WorldError, load_world
+from abcwc.sim.world import box_world
 from abcwc.types import PotCommand, StatusFlags, Twist
-from tests.conftest import box_world
 
 
 def test_joystick_overrides_host_within_one_period():

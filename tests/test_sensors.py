@@ -10,8 +10,9 @@ import pytest
 from abcwc.sim import SimBase
 from abcwc.sim.raycast import cone_nearest_distance, ray_segment_distances
 from abcwc.sim.sensors import sensor_pose
+from abcwc.sim.world import box_world
 from abcwc.types import Pose2D
-from tests.conftest import box_world, noise_free
+from tests.conftest import noise_free
 
 W, H = 8.0, 6.0
 

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from abcwc.sim import ChairErrors, SimBase
+from abcwc.sim.world import box_world
 from abcwc.types import Pose2D, PotCommand, Twist
-from tests.conftest import box_world, noise_free
+from tests.conftest import noise_free
 
 
 def ideal_chair(**options) -> SimBase:

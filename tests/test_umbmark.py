@@ -27,8 +27,8 @@ from abcwc.estimation.umbmark import (
 )
 from abcwc.sim.base import SimBase
 from abcwc.sim.motor import ChairErrors
+from abcwc.sim.world import box_world
 from abcwc.types import Pose2D
-from tests.conftest import box_world
 
 OPEN = box_world(20, 20, centred=True)
 

@@ -47,7 +47,7 @@ def reference_integrate_arcs(d_left: np.ndarray, d_right: np.ndarray, wheel_base
     return odometry.integrate_odometry(d_left, d_right, wheel_base, start, method="exact")
 
 
-_B = 0.44  # m, the chair's wheel base (data/chair.toml)
+_B = default_params().wheel_base  # m, the chair's nominal wheel base
 
 
 def _array(got: Any, shape: tuple[int, ...], what: str, rows_hint: str) -> np.ndarray:

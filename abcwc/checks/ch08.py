@@ -39,6 +39,7 @@ from abcwc.estimation.umbmark import (
     wheel_correction_factors,
     wheel_diameter_ratio,
 )
+from abcwc.params import default_params
 
 __all__ = [
     "alpha_beta_radius_check",
@@ -50,7 +51,7 @@ __all__ = [
     "worked_example",
 ]
 
-WHEEL_BASE = 0.44  # m, the chair's nominal b (thesis table 2)
+WHEEL_BASE = default_params().wheel_base  # m, the chair's nominal b (A.18: 440 mm)
 
 
 # --- reference answers ----------------------------------------------------------------

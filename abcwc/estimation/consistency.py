@@ -42,6 +42,8 @@ from abcwc.estimation.umbmark import (
     run_umbmark,
     umbmark_corrections,
 )
+from abcwc.log import RunLog
+from abcwc.sim.world import box_world
 from abcwc.types import Pose2D, Twist
 
 FIX_STD = (0.05, 0.05, 0.02)
@@ -99,19 +101,11 @@ class MonteCarloResult:
                 f"{odo.mean():.2f} m; worst EKF/odometry ratio {(ekf / odo).max():.3f}")
 
 
-def _hall():
-    from abcwc.sim.world import world_from_dict
-
-    h = HALL_SIZE / 2
-    return world_from_dict({"name": "hall", "places": {"start": [0.0, 0.0, 0.0]},
-                            "walls": [[[-h, -h], [h, -h], [h, h], [-h, h], [-h, -h]]]})
-
-
 def calibrate_worn_chair(side: float = THESIS_SIDE) -> OdometryCalibration:
     """UMBmark + distance scale on the worn chair, and the residual they leave."""
     from abcwc.sim.base import SimBase
 
-    hall = _hall()
+    hall = box_world(HALL_SIZE, HALL_SIZE, centred=True, name="hall")
 
     def make(seed: int) -> SimBase:
         return SimBase(hall, seed=seed, errors="worn", people=False)
@@ -126,6 +120,22 @@ def calibrate_worn_chair(side: float = THESIS_SIDE) -> OdometryCalibration:
     return OdometryCalibration(correction, wheel_base, e_max_syst(cw, ccw) / (4 * side))
 
 
+def filter_drive(log: RunLog, bias_prior: tuple[float, float],
+                 calibration: OdometryCalibration, seed: int, fix_every: float = 10.0,
+                 **ekf_options: object) -> tuple[np.ndarray, np.ndarray]:
+    """Filter a simulated drive from its true start: UMBmark-corrected wheels, the gyro
+    with ``bias_prior = (bias, std)`` (rad/s), and a seeded landmark fix every
+    ``fix_every`` s. ``ekf_options`` go to :class:`~abcwc.estimation.ekf.ChairEkf`.
+    Returns :func:`~abcwc.estimation.ekf.run_ekf`'s states and covariances."""
+    ekf = ChairEkf(Pose2D(*log.pose[0]), correction=calibration.correction,
+                   wheel_base=calibration.wheel_base, gyro_bias=bias_prior[0],
+                   gyro_bias_std=bias_prior[1],
+                   noise=noise_from_models(residual_rel=calibration.residual_rel,
+                                           horizon=fix_every), **ekf_options)
+    fixes = absolute_fixes(log, fix_every, FIX_STD, seed=seed)
+    return run_ekf(log, ekf, fixes, np.diag(np.square(FIX_STD)))
+
+
 def ekf_run(seed: int, seconds: float, calibration: OdometryCalibration,
             fix_every: float = 10.0) -> EkfRun:
     """One seeded drive on the floor world, filtered; see the module docstring."""
@@ -137,12 +147,7 @@ def ekf_run(seed: int, seconds: float, calibration: OdometryCalibration,
     log = sim.run(FollowWaypoints(floor_mixed_drive()), seconds)
     if log.collisions[-1]:
         raise RuntimeError(f"seed {seed}: the route touched something; the drive is void")
-    ekf = ChairEkf(Pose2D(*log.pose[0]), correction=calibration.correction,
-                   wheel_base=calibration.wheel_base, gyro_bias=bias, gyro_bias_std=bias_std,
-                   noise=noise_from_models(residual_rel=calibration.residual_rel,
-                                           horizon=fix_every))
-    fixes = absolute_fixes(log, fix_every, FIX_STD, seed=seed)
-    states, covs = run_ekf(log, ekf, fixes, np.diag(np.square(FIX_STD)))
+    states, covs = filter_drive(log, (bias, bias_std), calibration, seed, fix_every)
     raw = odometry_from_log(log)
     return EkfRun(nees(log.pose, states, covs),
                   math.hypot(*(states[-1, :2] - log.pose[-1, :2])),

@@ -34,7 +34,6 @@ The same maths runs on a whole log at once (:func:`integrate_odometry`,
 
 from __future__ import annotations
 
-import math
 from typing import Literal
 
 import numpy as np
@@ -138,20 +137,9 @@ def odometry_step(
     docstring); ``"euler"`` is eqns 9-10 as printed. Heading wrapped to (-pi, pi].
     """
     _check_method(method)
-    if not wheel_base > 0:
-        raise ValueError(f"wheel_base must be > 0 m, got {wheel_base!r}")
-    d_c = (d_right + d_left) / 2.0
-    phi = (d_right - d_left) / wheel_base
-    theta = pose.theta
-    if method == "euler":
-        heading, length = theta, d_c
-    else:
-        half = phi / 2.0
-        heading = theta + half
-        exact = method == "exact" and half != 0.0
-        length = d_c * math.sin(half) / half if exact else d_c
-    return Pose2D(pose.x + length * math.cos(heading), pose.y + length * math.sin(heading),
-                  wrap_angle(theta + phi))
+    d_c, phi = pose_increments(d_left, d_right, wheel_base)
+    dx, dy = _chord(d_c, phi, np.float64(pose.theta), method)
+    return Pose2D(pose.x + float(dx), pose.y + float(dy), wrap_angle(pose.theta + float(phi)))
 
 
 def integrate_odometry(
@@ -306,9 +294,9 @@ class Odometry:
         d_left = dl * per_count * self.correction[0]
         d_right = dr * per_count * self.correction[1]
         self.pose = odometry_step(self.pose, d_left, d_right, self.wheel_base, self.method)
-        d_c = (d_right + d_left) / 2.0
-        self.distance += d_c
-        self.last_step = (d_c, (d_right - d_left) / self.wheel_base)
+        d_c, phi = pose_increments(d_left, d_right, self.wheel_base)
+        self.distance += float(d_c)
+        self.last_step = (float(d_c), float(phi))
         return self.pose
 
     def update_frame(self, frame: SensorFrame) -> Pose2D:

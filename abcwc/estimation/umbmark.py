@@ -318,14 +318,6 @@ def _clip(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
 
 
-def return_error(start: Pose2D, true_end: Pose2D, odometric_end: Pose2D) -> np.ndarray:
-    """``true - odometric`` end pose in the start frame: ``[x, y, theta]`` (m, m, rad)."""
-    c, s = math.cos(start.theta), math.sin(start.theta)
-    dx, dy = true_end.x - odometric_end.x, true_end.y - odometric_end.y
-    return np.array([c * dx + s * dy, -s * dx + c * dy,
-                     wrap_angle(true_end.theta - odometric_end.theta)])
-
-
 @dataclass(frozen=True)
 class SquareRun:
     """One square driven by odometry, in its start frame (x ahead, y left; m, rad)."""
@@ -345,10 +337,11 @@ class SquareRun:
     @property
     def error(self) -> np.ndarray:
         """Return error ``true - odometric`` end ``[x, y, theta]``; NaN without ground truth."""
-        true_end = self.true_end
+        true_end, end = self.true_end, self.odometric_end
         if true_end is None:
             return np.full(3, np.nan)
-        return return_error(Pose2D(), true_end, self.odometric_end)
+        return np.array([true_end.x - end.x, true_end.y - end.y,
+                         wrap_angle(true_end.theta - end.theta)])
 
 
 def run_square(base, direction: str, side: float = THESIS_SIDE,

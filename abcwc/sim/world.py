@@ -153,6 +153,20 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
     )
 
 
+def box_world(width: float = 40.0, height: float = 40.0, extra: list | None = None,
+              centred: bool = False, name: str = "box") -> World:
+    """An empty rectangular room from (0, 0) to (width, height) m, its ``start`` in the
+    middle facing +x; ``centred`` puts the middle (and the start) at the origin;
+    ``extra`` adds wall polylines."""
+    x0, y0 = (-width / 2, -height / 2) if centred else (0.0, 0.0)
+    x1, y1 = x0 + width, y0 + height
+    walls = [[[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]]] + (extra or [])
+    return world_from_dict({
+        "name": name, "walls": walls,
+        "places": {"start": [(x0 + x1) / 2, (y0 + y1) / 2, 0.0]},
+    })
+
+
 def load_world(name_or_path: str | Path) -> World:
     """Load a world by name (``"lab"``, ``"floor"``) or from a JSON file path."""
     candidate = Path(name_or_path)

@@ -1,0 +1,101 @@
+"""abcwc.geometry against closed forms: homogeneous 3x3 matrices and hand cases."""
+
+import math
+
+import numpy as np
+import pytest
+
+from abcwc.geometry import (
+    compose,
+    encoder_ticks_to_wheel_distance,
+    inverse,
+    inverse_transform_points,
+    relative,
+    transform_points,
+    wrap_angle,
+    wrap_tick_delta,
+)
+from abcwc.types import Pose2D
+
+
+def matrix(pose):
+    """The homogeneous transform of (x, y, theta): an independent SE(2) reference."""
+    x, y, t = pose
+    return np.array([[math.cos(t), -math.sin(t), x], [math.sin(t), math.cos(t), y], [0, 0, 1]])
+
+
+def pose_of(m):
+    return np.array([m[0, 2], m[1, 2], math.atan2(m[1, 0], m[0, 0])])
+
+
+def random_poses(n, seed):
+    rng = np.random.default_rng(seed)
+    return np.c_[rng.uniform(-5, 5, (n, 2)), rng.uniform(-math.pi, math.pi, n)]
+
+
+def same_pose(a, b):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    assert np.allclose(a[..., :2], b[..., :2], atol=1e-12)
+    assert np.allclose(wrap_angle(a[..., 2] - b[..., 2]), 0, atol=1e-12)
+
+
+def test_wrap_angle_is_half_open_for_scalars_and_arrays():
+    assert wrap_angle(-math.pi) == math.pi
+    assert wrap_angle(math.pi) == math.pi
+    assert wrap_angle(3 * math.pi) == pytest.approx(math.pi)
+    assert wrap_angle(-0.1) == -0.1
+    assert isinstance(wrap_angle(0.3), float)
+    angles = np.array([-math.pi, math.pi, -3 * math.pi, 7.0, -7.0, 0.0])
+    wrapped = wrap_angle(angles)
+    assert np.all(wrapped > -math.pi) and np.all(wrapped <= math.pi)
+    assert np.allclose(np.cos(wrapped), np.cos(angles)) and np.allclose(
+        np.sin(wrapped), np.sin(angles))
+    assert wrapped[0] == math.pi and wrapped[2] == math.pi
+
+
+def test_compose_inverse_relative_match_homogeneous_matrices():
+    a, b = random_poses(50, 1), random_poses(50, 2)
+    for pa, pb, got_c, got_r, got_i in zip(a, b, compose(a, b), relative(a, b), inverse(a)):
+        same_pose(got_c, pose_of(matrix(pa) @ matrix(pb)))
+        same_pose(got_r, pose_of(np.linalg.inv(matrix(pa)) @ matrix(pb)))
+        same_pose(got_i, pose_of(np.linalg.inv(matrix(pa))))
+
+
+def test_single_poses_answer_with_pose2d_and_arrays_with_arrays():
+    a, b = Pose2D(1.0, 2.0, 0.5), Pose2D(-0.3, 0.7, 2.9)
+    back = compose(a, relative(a, b))
+    assert isinstance(back, Pose2D)
+    same_pose([back.x, back.y, back.theta], [b.x, b.y, b.theta])
+    assert isinstance(compose((0, 0, 0), (1, 0, 0)), np.ndarray)
+    # a quarter turn then one metre forward ends one metre to the left
+    same_pose(compose(Pose2D(0, 0, math.pi / 2), Pose2D(1, 0, 0)).as_array(), [0, 1, math.pi / 2])
+
+
+def test_point_transforms_round_trip_and_match_matrices():
+    poses = random_poses(6, 3)
+    points = np.random.default_rng(4).normal(size=(6, 9, 2))
+    world = transform_points(poses, points)
+    for pose, local, got in zip(poses, points, world):
+        expect = (matrix(pose) @ np.c_[local, np.ones(len(local))].T).T[:, :2]
+        assert np.allclose(got, expect)
+        assert np.allclose(inverse_transform_points(pose, got), local)
+    assert transform_points(poses, points[:, 0]).shape == (6, 2)
+
+
+def test_bad_shapes_are_refused_with_the_allowed_shape():
+    with pytest.raises(ValueError, match=r"\(N, 3\)"):
+        compose(np.zeros(2), np.zeros(3))
+    with pytest.raises(ValueError, match=r"\(\.\.\., 2\)"):
+        transform_points((0, 0, 0), np.zeros((4, 3)))
+
+
+def test_encoder_counts_to_metres_corrects_the_counter_wrap():
+    top = 2**31 - 1
+    ticks = np.array([[top - 2, 0], [-(2**31) + 3, 10]])  # left wrapped after 6 counts
+    travel = encoder_ticks_to_wheel_distance(ticks, 0.001)
+    assert np.allclose(travel, [[0.006, 0.010]])
+    assert wrap_tick_delta(-(2**15) + 1 - (2**15 - 2), bits=16) == 3
+    with pytest.raises(ValueError, match="> 0 m"):
+        encoder_ticks_to_wheel_distance(ticks, -1.0)
+    with pytest.raises(ValueError, match="whole numbers"):
+        encoder_ticks_to_wheel_distance(np.array([[0.5, 1.0], [1.0, 2.0]]), 0.001)

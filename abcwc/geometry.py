@@ -26,13 +26,17 @@ def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
     """Wrap angles (rad) into (-pi, pi]; a float for a scalar, an array for an array.
 
     ``math.remainder`` gives [-pi, pi]; -pi is mapped to +pi so that the interval is
-    half-open and every heading has exactly one representation.
+    half-open and every heading has exactly one representation. Both paths are exact
+    (the answer is ``angle - 2 pi n`` to the last bit, so an angle already in range comes
+    back unchanged) and agree bit for bit: ``np.fmod`` is exact, and moving its result
+    from (pi, 2 pi) or (-2 pi, -pi] by one ``2 pi`` is exact too (Sterbenz's lemma).
     """
     if not isinstance(angle, np.ndarray):
         wrapped = math.remainder(float(angle), 2.0 * math.pi)
         return math.pi if wrapped == -math.pi else wrapped
-    wrapped = np.remainder(angle.astype(float) + np.pi, 2.0 * np.pi) - np.pi  # [-pi, pi)
-    return np.where(wrapped <= -np.pi, np.pi, wrapped)
+    wrapped = np.fmod(angle.astype(float), 2.0 * math.pi)  # (-2 pi, 2 pi), exact
+    wrapped = np.where(wrapped > math.pi, wrapped - 2.0 * math.pi, wrapped)
+    return np.where(wrapped <= -math.pi, wrapped + 2.0 * math.pi, wrapped)
 
 
 def _as_poses(pose: PoseLike) -> np.ndarray:

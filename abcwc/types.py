@@ -13,30 +13,6 @@ from enum import IntFlag
 import numpy as np
 
 
-def wrap_angle(angle: float) -> float:
-    """Wrap an angle (rad) to (-pi, pi]."""
-    wrapped = math.remainder(angle, 2.0 * math.pi)
-    return math.pi if wrapped == -math.pi else wrapped
-
-
-def wrap_tick_delta(delta: int | np.ndarray, bits: int = 32) -> int | np.ndarray:
-    """Difference of two cumulative counts, corrected for wrap-around at ``bits`` width.
-
-    The firmware keeps counts in a signed ``bits``-bit integer, which wraps from
-    ``2**(bits-1) - 1`` to ``-2**(bits-1)``. Any true increment smaller than half the
-    range in magnitude comes back right: the difference is taken modulo ``2**bits``
-    into ``[-2**(bits-1), 2**(bits-1))``.
-    """
-    if not isinstance(bits, int) or not 2 <= bits <= 64:
-        raise ValueError(f"bits must be an integer 2..64, got {bits!r}")
-    span = 1 << bits
-    half = 1 << (bits - 1)
-    if isinstance(delta, np.ndarray):
-        d = delta.astype(object) if bits == 64 else delta.astype(np.int64)
-        return ((d + half) % span - half).astype(np.int64)
-    return (int(delta) + half) % span - half
-
-
 def require_finite(name: str, value: float) -> float:
     """Return ``value`` as float, or raise ValueError if it is not a finite number."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):

@@ -99,3 +99,15 @@ def test_encoder_counts_to_metres_corrects_the_counter_wrap():
         encoder_ticks_to_wheel_distance(ticks, -1.0)
     with pytest.raises(ValueError, match="whole numbers"):
         encoder_ticks_to_wheel_distance(np.array([[0.5, 1.0], [1.0, 2.0]]), 0.001)
+
+
+def test_wrap_angle_is_exact_and_arrays_agree_with_scalars_bit_for_bit():
+    rng = np.random.default_rng(5)
+    inside = rng.uniform(-math.pi, math.pi, 1000)
+    assert np.array_equal(wrap_angle(inside), inside)  # in range: unchanged to the last bit
+    assert not np.array_equal(np.angle(np.exp(1j * inside)), inside)  # the old way rounds
+    angles = np.concatenate([inside * 40.0, [math.pi, -math.pi, 2 * math.pi, -0.0, 1e6]])
+    one_by_one = np.array([wrap_angle(float(a)) for a in angles])
+    assert np.array_equal(wrap_angle(angles), one_by_one)
+    # the answer is angle - 2 pi n exactly: 2 pi (the double) plus a small angle wraps back
+    assert wrap_angle(np.array([2 * math.pi + 0.25]))[0] == (2 * math.pi + 0.25) - 2 * math.pi

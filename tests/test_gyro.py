@@ -17,6 +17,7 @@ from abcwc.estimation import (
     allan_deviation,
     gyro_odometry_from_log,
     gyro_odometry_step,
+    integrate_gyro_heading,
 )
 from abcwc.params import default_params
 from abcwc.sim import SimBase
@@ -82,6 +83,36 @@ def test_gyro_odometry_class_equals_the_whole_log_version_on_a_drive():
         pose = odo.update(log.t[k], *log.ticks[k], log.gyro_z[k])
     assert (pose.x, pose.y) == pytest.approx(tuple(batch[-1, :2]), abs=1e-9)
     assert pose.theta == pytest.approx(batch[-1, 2], abs=1e-9)
+
+
+def test_gyro_odometry_survives_the_encoder_counter_wrapping():
+    """Counts that wrap past the int32 top give the same path as counts that do not."""
+    sim = SimBase(world="lab", seed=4, start="centre", people=False)
+    log = sim.run(lambda f: Twist(0.6, 0.9 * math.sin(0.7 * f.t)), 6.0)
+    near_top = 2**31 - 1 - int(log.ticks[len(log) // 2, 0])  # the left counter wraps midway
+    wrapped = (log.ticks.astype(np.int64) + near_top + 2**31) % 2**32 - 2**31
+    assert (np.diff(wrapped[:, 0]) < -(2**31)).any()
+    plain, rolled = GyroOdometry(bias=0.004), GyroOdometry(bias=0.004)
+    for k in range(len(log)):
+        want = plain.update(log.t[k], *log.ticks[k], log.gyro_z[k])
+        got = rolled.update(log.t[k], *wrapped[k], log.gyro_z[k])
+    assert math.hypot(want.x, want.y) > 2.0
+    assert (got.x, got.y, got.theta) == pytest.approx((want.x, want.y, want.theta), abs=1e-9)
+
+
+def test_gyro_odometry_refuses_bad_settings_and_counts():
+    with pytest.raises(ValueError, match=r"correction must be \(c_left, c_right\)"):
+        GyroOdometry(correction=(1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="bias"):
+        GyroOdometry(bias=math.nan)
+    with pytest.raises(ValueError, match="start must be a Pose2D"):
+        GyroOdometry(start=Pose2D(0.0, 0.0, math.nan))
+    with pytest.raises(ValueError, match="ticks_right"):
+        GyroOdometry().update(0.0, 0, math.nan, 0.0)
+    with pytest.raises(ValueError, match="pose must be a Pose2D"):
+        gyro_odometry_step(Pose2D(math.nan, 0.0, 0.0), 0.01, 0.01, 0.1, 0.02)
+    with pytest.raises(ValueError, match="theta0"):
+        integrate_gyro_heading(np.arange(3.0), np.zeros(3), theta0=math.nan)
 
 
 # ------------------------------------------------------------------ allan_deviation

@@ -15,12 +15,14 @@ from abcwc.behaviours import FollowWaypoints, GroundTruth, floor_mixed_drive
 from abcwc.estimation import (
     ChairEkf,
     EkfNoise,
+    absolute_fixes,
     estimate_gyro_bias,
     gyro_bias_prior,
     gyro_odometry_from_log,
     kalman_update,
     nees_band,
     odometry_from_log,
+    run_ekf,
 )
 from abcwc.estimation.bench import bench_ekf
 from abcwc.estimation.consistency import (
@@ -125,6 +127,39 @@ def test_bad_filter_settings_are_refused():
         EkfNoise(gyro=-0.003)
     with pytest.raises(ValueError, match="runs >= 1"):
         nees_band(0)
+
+
+@pytest.mark.parametrize("start_std", [(-0.01, 0.01, 0.005), (0.01, 0.01), (0.01, math.nan, 0.1)])
+def test_a_start_std_that_is_not_three_stds_at_least_zero_is_refused(start_std):
+    with pytest.raises(ValueError, match=r"start_std \(m, m, rad\) must be 3 finite"):
+        ChairEkf(Pose2D(), start_std=start_std)
+
+
+def test_bad_filter_inputs_are_refused():
+    with pytest.raises(ValueError, match="correction"):
+        ChairEkf(Pose2D(), correction=(1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="wheel_base"):
+        ChairEkf(Pose2D(), wheel_base=-0.44)
+    with pytest.raises(ValueError, match="start must be a Pose2D"):
+        ChairEkf(Pose2D(math.nan, 0.0, 0.0))
+    ekf = ChairEkf(Pose2D())
+    with pytest.raises(ValueError, match="pose must be a Pose2D"):
+        ekf.update_pose(Pose2D(0.0, 0.0, math.nan), np.eye(3))
+    with pytest.raises(ValueError, match="gyro_z"):
+        ekf.update_gyro(math.nan)
+    with pytest.raises(ValueError, match="wheel travel"):
+        ekf.update_wheels(math.nan, 0.0, 0.02)
+    with pytest.raises(ValueError, match="dt"):
+        ekf.predict(0.0)
+    assert np.isfinite(ekf.filter.x).all() and np.isfinite(ekf.filter.P).all()
+    log = SimBase(OPEN, people=False).run(lambda f: Twist(0.3, 0.0), 2.0)
+    with pytest.raises(ValueError, match=r"std \(m, m, rad\)"):
+        absolute_fixes(log, 0.5, (0.05, -0.05, 0.01))
+    with pytest.raises(ValueError, match="every"):
+        absolute_fixes(log, 0.0, (0.05, 0.05, 0.01))
+    fixes = absolute_fixes(log, 0.5, (0.05, 0.05, 0.01))
+    with pytest.raises(ValueError, match="fix_cov"):
+        run_ekf(log, ChairEkf(Pose2D(*log.pose[0])), fixes, np.eye(2))
 
 
 # --------------------------------------------------------------------- on the floor world

@@ -150,3 +150,48 @@ def test_log_validation_names_the_problem(curvy_log):
         validate_log(dataclasses.replace(log, ticks=ticks))
     with pytest.raises(ValueError, match="method"):
         Odometry(method="rk4")
+
+
+@pytest.mark.parametrize("correction", [(1, 1, 1), (1.0,), (0.99, math.nan), (1.0, -1.0),
+                                        "ab", 1.0])
+def test_a_correction_that_is_not_two_positive_factors_is_refused(curvy_log, correction):
+    with pytest.raises(ValueError, match=r"correction must be \(c_left, c_right\)"):
+        Odometry(correction=correction)
+    with pytest.raises(ValueError, match=r"correction must be \(c_left, c_right\)"):
+        odometry_from_log(curvy_log, correction=correction)
+    with pytest.raises(ValueError, match=r"correction must be \(c_left, c_right\)"):
+        gyro_odometry_from_log(curvy_log, correction=correction)
+
+
+def test_step_and_whole_log_refuse_nan_travel_and_poses():
+    with pytest.raises(ValueError, match="d_left .* finite"):
+        odometry_step(Pose2D(), math.nan, 0.1, 0.44)
+    with pytest.raises(ValueError, match="d_right .* finite"):
+        odometry_step(Pose2D(), 0.1, math.inf, 0.44)
+    with pytest.raises(ValueError, match="pose must be a Pose2D of finite numbers"):
+        odometry_step(Pose2D(0.0, math.nan, 0.0), 0.1, 0.1, 0.44)
+    d_left = np.array([0.1, 0.1, np.nan, 0.1])
+    with pytest.raises(ValueError, match="at step 2 is not finite"):
+        integrate_odometry(d_left, np.full(4, 0.1), 0.44)
+    with pytest.raises(ValueError, match="one length"):
+        integrate_odometry(np.full(3, 0.1), np.full(4, 0.1), 0.44)
+    with pytest.raises(ValueError, match="start must be a Pose2D"):
+        integrate_odometry(np.full(4, 0.1), np.full(4, 0.1), 0.44, start=Pose2D(math.inf))
+
+
+def test_step_odometry_refuses_bad_counts_and_settings():
+    odo = Odometry()
+    for bad in (math.nan, 3.5, "7"):
+        with pytest.raises(ValueError, match="ticks_left"):
+            odo.update(bad, 0)
+    assert odo.update(3.0, 0) == Pose2D()  # a whole float count is a count
+    with pytest.raises(ValueError, match="bits"):
+        Odometry(bits=70)
+    with pytest.raises(ValueError, match="wheel_base"):
+        Odometry(wheel_base=math.nan)
+    with pytest.raises(ValueError, match="start must be a Pose2D"):
+        Odometry(start=Pose2D(math.nan, 0.0, 0.0))
+    with pytest.raises(ValueError, match="correction"):
+        encoder_ticks_to_wheel_distance(np.array([[1, 2]]), correction=(1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="correction"):
+        encoder_ticks_to_wheel_distance(10, correction=-1.0)

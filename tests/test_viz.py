@@ -185,6 +185,18 @@ def test_plot_signals_panels_and_thinning():
         viz.plot_signals(log, names=("speed",))
 
 
+def test_encoder_velocity_is_the_wheel_speed_and_survives_the_counter_wrap():
+    p, n = default_params(), 50
+    right = np.arange(n, dtype=np.int64) * 20  # 20 counts a period, steady
+    left = 2**31 - 1 - 200 + np.arange(n, dtype=np.int64) * 10  # 10, wrapping past int32
+    left = (left + 2**31) % 2**32 - 2**31
+    assert (np.diff(left) < 0).any()
+    log = dataclasses.replace(synthetic_log(n), ticks=np.column_stack([left, right]))
+    v, w = viz.encoder_velocity(log)
+    speeds = np.array([10, 20]) * p.distance_per_count / 0.02
+    assert np.allclose(v, speeds.mean()) and np.allclose(w, (speeds[1] - speeds[0]) / p.wheel_base)
+
+
 # ---------------------------------------------------------------- animation
 def test_frame_rows_end_on_the_last_row():
     rows = viz.frame_rows(15_000)

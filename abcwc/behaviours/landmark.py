@@ -51,7 +51,8 @@ import math
 from numbers import Real
 from typing import Protocol
 
-from abcwc.types import Pose2D, SensorFrame, Twist, wrap_angle
+from abcwc.geometry import wrap_angle
+from abcwc.types import Pose2D, SensorFrame, Twist
 
 TURN = "turn"
 DRIVE = "drive"

@@ -25,8 +25,9 @@ import numpy as np
 
 from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
 from abcwc.estimation import odometry
+from abcwc.geometry import wrap_angle
 from abcwc.params import default_params
-from abcwc.types import Pose2D, wrap_angle
+from abcwc.types import Pose2D
 
 __all__ = [
     "integrate_arcs_check",
@@ -154,7 +155,7 @@ def _step_hint(got: Pose2D, pose: Pose2D, d_left: float, d_right: float, b: floa
                 "counter-clockwise) when the right wheel travels further")
     if same(pose.x + d_c * math.cos(pose.theta), pose.y + d_c * math.sin(pose.theta),
             new) and not math.isclose(new, turned):
-        return "wrap the new heading into (-pi, pi] (abcwc.types.wrap_angle does it)"
+        return "wrap the new heading into (-pi, pi] (abcwc.geometry.wrap_angle does it)"
     return ""
 
 

@@ -29,7 +29,6 @@ from abcwc.estimation.odometry import (
     odometry_step,
     validate_log,
     wheel_travel,
-    wrap_tick_delta,
 )
 from abcwc.estimation.umbmark import (
     SquareDriver,
@@ -51,6 +50,7 @@ from abcwc.estimation.umbmark import (
     wheel_correction_factors,
     wheel_diameter_ratio,
 )
+from abcwc.geometry import wrap_tick_delta
 
 __all__ = [
     "ChairEkf", "EkfNoise", "FastEkf", "FilterpyEkf", "GyroOdometry", "Odometry",

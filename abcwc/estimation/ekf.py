@@ -82,8 +82,14 @@ from functools import lru_cache
 import numpy as np
 from scipy.stats import chi2
 
+from abcwc import geometry
 from abcwc.estimation.gyro import estimate_gyro_bias
-from abcwc.estimation.odometry import log_wheel_travel, validate_log
+from abcwc.estimation.odometry import (
+    _check_correction,
+    _check_pose,
+    log_wheel_travel,
+    validate_log,
+)
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.types import Pose2D
@@ -139,7 +145,7 @@ def kalman_update(x: np.ndarray, p: np.ndarray, z: np.ndarray, h: np.ndarray,
     """
     y = z - h @ x
     if angle is not None:
-        y[angle] = math.remainder(y[angle], 2 * math.pi)
+        y[angle] = geometry.wrap_angle(float(y[angle]))
     pht = p @ h.T
     s = h @ pht + r
     k = pht @ _inverse(s)
@@ -242,6 +248,19 @@ def gyro_bias_prior(gyro_samples_while_still: np.ndarray,
     return bias, std
 
 
+def _standard_deviations(name: str, values: tuple[float, ...], size: int) -> np.ndarray:
+    """``values`` as a float array of ``size`` standard deviations; ValueError unless each
+    is a finite number >= 0 (a negative one would pass unnoticed once squared)."""
+    try:
+        stds = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        stds = np.zeros(0)
+    if stds.shape != (size,) or not (np.isfinite(stds).all() and (stds >= 0).all()):
+        raise ValueError(f"{name} must be {size} finite standard deviations >= 0, "
+                         f"got {values!r}")
+    return stds
+
+
 # --------------------------------------------------------------------- back ends
 class FastEkf:
     """The EKF in plain NumPy: :func:`motion`, :func:`motion_jacobian` (inlined, on a
@@ -304,7 +323,7 @@ class FilterpyEkf:
         def residual(a: np.ndarray, b: np.ndarray) -> np.ndarray:
             y = a - b
             if angle is not None:
-                y[angle] = math.remainder(float(y[angle, 0]), 2 * math.pi)
+                y[angle] = geometry.wrap_angle(float(y[angle, 0]))
             return y
 
         self._kf.update(np.asarray(z, dtype=float).reshape(-1, 1), lambda s: h,
@@ -315,7 +334,8 @@ class FilterpyEkf:
 class ChairEkf:
     """Wheel odometry + gyro (with its bias) + occasional absolute fixes.
 
-    ``correction`` and ``wheel_base`` are UMBmark's; ``gyro_bias`` and
+    ``start_std`` (m, m, rad) is the start pose's uncertainty, three finite numbers
+    ``>= 0``. ``correction`` and ``wheel_base`` are UMBmark's; ``gyro_bias`` and
     ``gyro_bias_std`` (rad/s) the bias's starting estimate and its uncertainty
     (:func:`gyro_bias_prior`; ``None``: the gyro model's turn-on spread).
     ``estimate_bias=False`` holds the bias at ``gyro_bias`` for good (no walk, no
@@ -330,8 +350,12 @@ class ChairEkf:
                  gyro_bias_std: float | None = None, estimate_bias: bool = True):
         self.params = p = params or default_params()
         self.noise = noise or noise_from_models(p)
-        self.correction = correction
-        self.wheel_base = p.wheel_base if wheel_base is None else wheel_base
+        self.correction = _check_correction(correction)
+        self.wheel_base = p.wheel_base if wheel_base is None else float(wheel_base)
+        if not (math.isfinite(self.wheel_base) and self.wheel_base > 0):
+            raise ValueError(f"wheel_base must be a finite distance > 0 m, got {wheel_base!r}")
+        start_std = _standard_deviations("start_std (m, m, rad)", start_std, 3)
+        _check_pose("start", start)
         self.estimate_bias = bool(estimate_bias)
         bias_std = p.gyro.bias_std if gyro_bias_std is None else float(gyro_bias_std)
         if not (math.isfinite(gyro_bias) and math.isfinite(bias_std) and bias_std >= 0):
@@ -352,7 +376,7 @@ class ChairEkf:
     def pose(self) -> Pose2D:
         """The current pose estimate (heading wrapped)."""
         x = self.filter.x
-        return Pose2D(float(x[X]), float(x[Y]), math.remainder(float(x[THETA]), 2 * math.pi))
+        return Pose2D(float(x[X]), float(x[Y]), geometry.wrap_angle(float(x[THETA])))
 
     @property
     def bias(self) -> float:
@@ -361,30 +385,45 @@ class ChairEkf:
 
     def predict(self, dt: float) -> None:
         """Propagate over ``dt`` seconds."""
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a finite period > 0 s, got {dt!r}")
         self.filter.predict(dt, self.noise.process(dt, self.estimate_bias))
 
     def update_wheels(self, d_left: float, d_right: float, dt: float) -> None:
-        """Update with one period's wheel travel (m, already corrected)."""
+        """Update with one period's wheel travel (m, already corrected) over ``dt`` (s)."""
+        if not (math.isfinite(d_left) and math.isfinite(d_right) and math.isfinite(dt)
+                and dt > 0):
+            raise ValueError(f"wheel travel must be finite and dt > 0 s, got d_left={d_left!r}, "
+                             f"d_right={d_right!r}, dt={dt!r}")
         v = (d_right + d_left) / 2 / dt
         w = (d_right - d_left) / self.wheel_base / dt
         self.filter.update(np.array([v, w]), H_WHEEL, self.noise.wheel(v, w, self.wheel_base))
 
     def update_gyro(self, gyro_z: float) -> None:
         """Update with one gyro sample (rad/s, bias included: ``z = omega + b``)."""
+        if not math.isfinite(gyro_z):
+            raise ValueError(f"gyro_z must be a finite rate (rad/s), got {gyro_z!r}")
         self.filter.update(np.array([gyro_z]), H_GYRO, self._r_gyro)
 
     def update_pose(self, pose: Pose2D, cov: np.ndarray) -> None:
         """Update with an absolute fix ``pose`` of covariance ``cov`` (3 x 3)."""
+        _check_pose("pose", pose)
         self.filter.update(np.array([pose.x, pose.y, pose.theta]), H_POSE, np.asarray(cov),
                            angle=2)
 
 
 def absolute_fixes(log: RunLog, every: float, std: tuple[float, float, float],
                    seed: int = 0) -> dict[int, Pose2D]:
-    """Noisy fixes from the log's ground truth every ``every`` seconds: {row: pose}."""
+    """Noisy fixes from the log's ground truth every ``every`` seconds: {row: pose}.
+
+    ``std`` (m, m, rad) is the fixes' noise, three finite numbers ``>= 0``.
+    """
+    if not (isinstance(every, (int, float)) and math.isfinite(every) and every > 0):
+        raise ValueError(f"every must be a finite interval > 0 s, got {every!r}")
+    stds = _standard_deviations("std (m, m, rad)", std, 3)
     rng = np.random.default_rng(seed)
     rows = np.flatnonzero(np.diff(np.floor((log.t - log.t[0]) / every), prepend=0) > 0)
-    noise = rng.standard_normal((len(rows), 3)) * np.asarray(std)
+    noise = rng.standard_normal((len(rows), 3)) * stds
     return {int(k): Pose2D(*(log.pose[k] + e)) for k, e in zip(rows, noise)}
 
 
@@ -400,6 +439,11 @@ def run_ekf(log: RunLog, ekf: ChairEkf, fixes: dict[int, Pose2D] | None = None,
     fixes = fixes or {}
     if fixes and fix_cov is None:
         raise ValueError("fixes given without fix_cov (3 x 3 covariance of a fix)")
+    if fixes:
+        cov = np.asarray(fix_cov, dtype=float)
+        if cov.shape != (3, 3) or not np.isfinite(cov).all() or (np.diag(cov) <= 0).any():
+            raise ValueError(f"fix_cov must be a finite 3 x 3 covariance with a positive "
+                             f"diagonal, got {fix_cov!r}")
     travel = log_wheel_travel(log, ekf.params, ekf.correction)
     dts = np.diff(log.t)
     n = len(log)
@@ -429,7 +473,7 @@ def nees(truth: np.ndarray, states: np.ndarray, covs: np.ndarray,
     err = np.asarray(truth, dtype=float).reshape(len(states), len(ix)) - states[:, ix]
     if THETA in ix:
         j = ix.index(THETA)
-        err[:, j] = np.angle(np.exp(1j * err[:, j]))
+        err[:, j] = geometry.wrap_angle(err[:, j])
     sub = covs[:, ix][:, :, ix]
     return np.einsum("ni,ni->n", err, np.linalg.solve(sub, err[:, :, None])[:, :, 0])
 

@@ -28,16 +28,20 @@ import math
 
 import numpy as np
 
+from abcwc import geometry
 from abcwc.estimation.odometry import (
     Method,
+    _check_correction,
     _check_method,
+    _check_pose,
     _log_start,
+    _whole_count,
     log_wheel_travel,
     validate_log,
 )
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
-from abcwc.types import Pose2D, SensorFrame, wrap_angle
+from abcwc.types import Pose2D, SensorFrame, require_finite
 
 
 def estimate_gyro_bias(gyro_samples_while_still: np.ndarray) -> float:
@@ -62,8 +66,10 @@ def integrate_gyro_heading(
     """Heading (rad, wrapped) at every timestamp from gyro rates (eqn 14).
 
     ``theta[0] = theta0`` and ``theta[k + 1] = theta[k] + (g[k] - bias) dt[k]``.
-    Refuses NaN samples and non-increasing timestamps.
+    Refuses NaN samples, a NaN ``theta0`` or ``bias`` and non-increasing timestamps.
     """
+    theta0 = require_finite("theta0 (rad)", theta0)
+    bias = require_finite("bias (rad/s)", bias)
     t = np.asarray(t, dtype=float)
     gyro = np.asarray(gyro_z, dtype=float)
     if t.shape != gyro.shape or t.ndim != 1:
@@ -76,7 +82,7 @@ def integrate_gyro_heading(
         raise ValueError("timestamps must be finite and strictly increasing")
     increments = (gyro[:-1] - bias) * np.diff(t)
     theta = theta0 + np.concatenate([[0.0], np.cumsum(increments)])
-    return np.angle(np.exp(1j * theta))
+    return geometry.wrap_angle(theta)
 
 
 def gyro_odometry_from_log(
@@ -97,9 +103,9 @@ def gyro_odometry_from_log(
     """
     _check_method(method)
     validate_log(log, need_gyro=True)
-    start = _log_start(log, start)
+    start = _check_pose("start", _log_start(log, start))
     theta = np.unwrap(integrate_gyro_heading(log.t, log.gyro_z, start.theta, bias))
-    travel = log_wheel_travel(log, params, correction, bits)
+    travel = log_wheel_travel(log, params or default_params(), correction, bits)
     d_c = travel.sum(axis=1) / 2.0
     phi = np.diff(theta)
     if method == "euler":
@@ -110,7 +116,7 @@ def gyro_odometry_from_log(
     out = np.empty((len(theta), 3))
     out[:, 0] = start.x + np.concatenate([[0.0], np.cumsum(length * np.cos(heading))])
     out[:, 1] = start.y + np.concatenate([[0.0], np.cumsum(length * np.sin(heading))])
-    out[:, 2] = np.angle(np.exp(1j * theta))
+    out[:, 2] = geometry.wrap_angle(theta)
     return out
 
 
@@ -128,8 +134,10 @@ def gyro_odometry_step(pose: Pose2D, d_left: float, d_right: float, gyro_z: floa
         y' = y + d_c sin(theta + phi / 2)
         theta' = theta + phi                  (wrapped to (-pi, pi])
 
-    The wheels' own heading change ``(d_r - d_l) / b`` is not used at all.
+    The wheels' own heading change ``(d_r - d_l) / b`` is not used at all. A pose or
+    value that is not a finite number is refused (ValueError).
     """
+    _check_pose("pose", pose)
     values = {"d_left": d_left, "d_right": d_right, "gyro_z": gyro_z, "dt": dt, "bias": bias}
     for name, value in values.items():
         if not math.isfinite(value):
@@ -140,7 +148,7 @@ def gyro_odometry_step(pose: Pose2D, d_left: float, d_right: float, gyro_z: floa
     d_c = (d_right + d_left) / 2.0
     heading = pose.theta + phi / 2.0
     return Pose2D(pose.x + d_c * math.cos(heading), pose.y + d_c * math.sin(heading),
-                  wrap_angle(pose.theta + phi))
+                  geometry.wrap_angle(pose.theta + phi))
 
 
 def allan_deviation(rates: np.ndarray, period: float,
@@ -187,32 +195,39 @@ class GyroOdometry:
     """Step by step: gyro heading, encoder distance (midpoint heading per step).
 
     Feed it every frame (:meth:`update_frame`); the gyro sample of one frame turns
-    the heading over the period up to the next.
+    the heading over the period up to the next. Counts may wrap at ``bits`` width.
+    ``bias`` (rad/s), ``correction`` (UMBmark's ``(c_left, c_right)``) and ``start``
+    are checked here (ValueError).
     """
 
     def __init__(self, bias: float = 0.0, params: ChairParams | None = None,
-                 correction: tuple[float, float] = (1.0, 1.0), start: Pose2D | None = None):
+                 correction: tuple[float, float] = (1.0, 1.0), start: Pose2D | None = None,
+                 bits: int = 32):
         self.params = params or default_params()
-        self.bias = float(bias)
-        self.correction = correction
-        self.pose = start or Pose2D()
+        self.bias = require_finite("bias (rad/s)", bias)
+        self.correction = _check_correction(correction)
+        geometry.wrap_tick_delta(0, bits)  # refuses a counter width outside 2..64 bits now
+        self.bits = bits
+        self.pose = _check_pose("start", start or Pose2D())
         self._last: tuple[int, int, float, float] | None = None  # counts, t, rate
 
     def update(self, t: float, ticks_left: int, ticks_right: int, gyro_z: float) -> Pose2D:
         """Feed one frame's time (s), cumulative counts and gyro rate (rad/s)."""
         if not math.isfinite(gyro_z):
             raise ValueError(f"gyro_z sample at t={t} s is not finite ({gyro_z})")
+        counts = (_whole_count("ticks_left", ticks_left), _whole_count("ticks_right", ticks_right))
         if self._last is None:
-            self._last = (int(ticks_left), int(ticks_right), float(t), float(gyro_z))
+            self._last = (*counts, float(t), float(gyro_z))
             return self.pose
         left0, right0, t0, rate = self._last
         if not t > t0:
             raise ValueError(f"timestamps must increase: {t0} s then {t} s")
-        per_count = self.params.distance_per_count
-        d_left = (int(ticks_left) - left0) * per_count * self.correction[0]
-        d_right = (int(ticks_right) - right0) * per_count * self.correction[1]
+        travel = geometry.encoder_ticks_to_wheel_distance(
+            np.array([(left0, right0), counts]), self.params.distance_per_count, self.bits)[0]
+        d_left = float(travel[0]) * self.correction[0]
+        d_right = float(travel[1]) * self.correction[1]
         self.pose = gyro_odometry_step(self.pose, d_left, d_right, rate, t - t0, self.bias)
-        self._last = (int(ticks_left), int(ticks_right), float(t), float(gyro_z))
+        self._last = (*counts, float(t), float(gyro_z))
         return self.pose
 
     def update_frame(self, frame: SensorFrame) -> Pose2D:

@@ -61,9 +61,10 @@ from pathlib import Path
 import numpy as np
 
 from abcwc.estimation.odometry import Odometry
+from abcwc.geometry import wrap_angle
 from abcwc.params import default_params
 from abcwc.paths import data_dir
-from abcwc.types import Pose2D, SensorFrame, Twist, wrap_angle
+from abcwc.types import Pose2D, SensorFrame, Twist
 
 THESIS_SIDE = 3.5  # m, the thesis's square (A.16: L = 3.5)
 

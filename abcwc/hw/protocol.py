@@ -30,8 +30,8 @@ import struct
 from dataclasses import dataclass, fields
 from typing import ClassVar
 
+from abcwc.geometry import wrap_tick_delta
 from abcwc.params import default_params
-from abcwc.types import wrap_tick_delta
 
 __all__ = [
     "PROTOCOL_VERSION",

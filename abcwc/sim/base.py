@@ -21,13 +21,14 @@ import pymunk
 
 from abcwc.base import Controller, run_controller
 from abcwc.control.interface_board import InterfaceBoard
+from abcwc.geometry import wrap_angle
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.sim.motor import ChairErrors, MotorController, resolve_errors
 from abcwc.sim.people import PERSON_COLLISION_TYPE, Walker, circles_of
 from abcwc.sim.sensors import Encoders, Gyro, IrRing, ScanSensor, Sonar
 from abcwc.sim.world import World, load_world
-from abcwc.types import LaserScan, Pose2D, PotCommand, SensorFrame, StatusFlags, Twist, wrap_angle
+from abcwc.types import LaserScan, Pose2D, PotCommand, SensorFrame, StatusFlags, Twist
 
 CHAIR_COLLISION_TYPE = 1
 WALL_COLLISION_TYPE = 2

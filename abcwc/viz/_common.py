@@ -54,14 +54,6 @@ def as_pose(pose: PoseLike) -> tuple[float, float, float]:
     return float(values[0]), float(values[1]), float(values[2])
 
 
-def transform_points(points: np.ndarray, pose: PoseLike) -> np.ndarray:
-    """Points (K, 2) in the frame at ``pose`` expressed in the world frame."""
-    x, y, theta = as_pose(pose)
-    c, s = math.cos(theta), math.sin(theta)
-    pts = np.asarray(points, dtype=float)
-    return np.column_stack([x + c * pts[:, 0] - s * pts[:, 1], y + s * pts[:, 0] + c * pts[:, 1]])
-
-
 def decimate(n: int, max_points: int) -> np.ndarray:
     """Row indices that thin ``n`` rows to at most ``max_points``, keeping the last."""
     if n <= max_points:

@@ -17,6 +17,7 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
 
+from abcwc.geometry import transform_points
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.sim.world import World
@@ -28,12 +29,12 @@ from abcwc.viz._common import (
     PLACE_COLOR,
     WALL_COLOR,
     PoseLike,
+    as_pose,
     decimate,
     new_axes,
     poses_of,
     require_poses,
     resolve_world,
-    transform_points,
     world_figsize,
     zoom_to,
 )
@@ -121,7 +122,7 @@ class ChairArtist:
     def update(self, pose: PoseLike) -> None:
         """Place the chair at ``pose`` (Pose2D or x, y, theta)."""
         for name, outline in self.outlines.items():
-            self.patches[name].set_xy(transform_points(outline, pose))
+            self.patches[name].set_xy(transform_points(as_pose(pose), outline))
 
     def set_visible(self, visible: bool) -> None:
         """Show or hide every part of the chair."""

@@ -16,6 +16,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.colors import to_rgba
 from matplotlib.patches import Wedge
 
+from abcwc.geometry import compose, transform_points
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.sim.sensors import IrRing
@@ -34,11 +35,10 @@ Mount = tuple[float, float, float]
 
 
 def mount_pose(pose: PoseLike, mount: Mount) -> tuple[float, float, float]:
-    """World ``(x, y, heading)`` of a sensor mounted at ``mount`` on a chair at ``pose``."""
-    x, y, theta = as_pose(pose)
-    mx, my, yaw = mount
-    c, s = math.cos(theta), math.sin(theta)
-    return x + c * mx - s * my, y + s * mx + c * my, theta + yaw
+    """World ``(x, y, heading)`` of a sensor mounted at ``mount`` on a chair at ``pose``:
+    ``pose (+) mount`` (heading wrapped to (-pi, pi])."""
+    x, y, heading = compose(as_pose(pose), mount)
+    return float(x), float(y), float(heading)
 
 
 def scan_to_points(scan: LaserScan, pose: PoseLike, mount: Mount = (0.0, 0.0, 0.0),
@@ -48,12 +48,11 @@ def scan_to_points(scan: LaserScan, pose: PoseLike, mount: Mount = (0.0, 0.0, 0.
     ``pose`` is the chair's (base_link) pose when the scan was taken and ``mount`` the
     scanner's x, y, yaw in base_link (e.g. ``params.lidar.mount``).
     """
-    sx, sy, heading = mount_pose(pose, mount)
     ranges = np.asarray(scan.ranges, dtype=float)
     keep = np.isfinite(ranges)
-    angles = heading + scan.angles[keep]
-    return np.column_stack([sx + ranges[keep] * np.cos(angles),
-                            sy + ranges[keep] * np.sin(angles)])
+    angles = scan.angles[keep]
+    in_scanner = np.column_stack([ranges[keep] * np.cos(angles), ranges[keep] * np.sin(angles)])
+    return transform_points(mount_pose(pose, mount), in_scanner)
 
 
 def plot_scan(scan: LaserScan, pose: PoseLike, mount: Mount, ax: Axes | None = None,
@@ -121,10 +120,10 @@ def _draw_ir(ax: Axes, readings: np.ndarray, pose: PoseLike, p: ChairParams) -> 
     mounts = IrRing(p.ir, np.random.default_rng(0)).mounts
     ends, too_close = [], []
     for (mx, my, yaw), reading in zip(mounts, readings):
-        x, y, heading = mount_pose(pose, (mx, my, yaw))
+        sensor = mount_pose(pose, (mx, my, yaw))
+        x, y = sensor[:2]
         if math.isfinite(reading):
-            ends.append([(x, y), (x + reading * math.cos(heading),
-                                  y + reading * math.sin(heading))])
+            ends.append([(x, y), tuple(transform_points(sensor, (reading, 0.0)))])
         elif reading < 0:
             too_close.append((x, y))
     if ends:

@@ -9,8 +9,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
+from abcwc.geometry import encoder_ticks_to_wheel_distance
 from abcwc.log import RunLog
-from abcwc.params import default_params
+from abcwc.params import ChairParams, default_params
 from abcwc.viz._common import decimate
 
 
@@ -24,12 +25,24 @@ def true_velocity(log: RunLog) -> tuple[np.ndarray, np.ndarray]:
     return v, np.gradient(np.unwrap(pose[:, 2])) / dt
 
 
-def encoder_velocity(log: RunLog) -> tuple[np.ndarray, np.ndarray]:
-    """v (m/s) and w (rad/s) from the encoder counts (nominal wheel sizes)."""
-    p, dt = default_params(), log.period or 1.0
+def encoder_velocity(log: RunLog, params: ChairParams | None = None,
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """v (m/s) and w (rad/s) per row from the encoder counts (``params``' wheel sizes,
+    default the nominal ones).
+
+    Each wheel's travel per period comes from
+    :func:`abcwc.geometry.encoder_ticks_to_wheel_distance` (counter wrap corrected); a
+    row's speed is the mean of the periods either side of it (``np.gradient``'s central
+    difference), one-sided at the ends.
+    """
+    p, dt = params or default_params(), log.period or 1.0
     if len(log) < 2:
         return np.zeros(len(log)), np.zeros(len(log))
-    wheels = np.gradient(log.ticks.astype(float), axis=0) * p.distance_per_count / dt
+    travel = encoder_ticks_to_wheel_distance(log.ticks, p.distance_per_count)
+    per_row = np.empty((len(log), 2))
+    per_row[0], per_row[-1] = travel[0], travel[-1]
+    per_row[1:-1] = (travel[:-1] + travel[1:]) / 2.0
+    wheels = per_row / dt
     return wheels.mean(axis=1), (wheels[:, 1] - wheels[:, 0]) / p.wheel_base
 
 

@@ -61,6 +61,14 @@ def test_bad_input_is_refused():
         umbmark_corrections(np.zeros((0, 2)), [[0, 0]], 3.5, 0.44)
     with pytest.raises(ValueError, match="use"):
         umbmark_corrections([[0.1, 0]], [[0, 0]], 3.5, 0.44, use="z")
+    with pytest.raises(ValueError, match=r"cg_ccw must be a finite \(x, y\)"):
+        alpha_beta([0.1, 0.0], [math.nan, 0.0], 3.5)
+    with pytest.raises(ValueError, match=r"cg_cw must be a finite \(x, y\)"):
+        alpha_beta([0.1], [0.0, 0.0], 3.5)
+    with pytest.raises(ValueError, match="beta"):
+        curve_radius(math.nan, 3.5)
+    with pytest.raises(ValueError, match="e_b"):
+        model_return_error(3.5, 0.44, 1.01, -1.03, "cw")
 
 
 def test_thesis_covariance_reproduced():

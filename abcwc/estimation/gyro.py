@@ -34,6 +34,7 @@ from abcwc.estimation.odometry import (
     _check_correction,
     _check_method,
     _check_pose,
+    _chord,
     _log_start,
     _whole_count,
     log_wheel_travel,
@@ -106,16 +107,10 @@ def gyro_odometry_from_log(
     start = _check_pose("start", _log_start(log, start))
     theta = np.unwrap(integrate_gyro_heading(log.t, log.gyro_z, start.theta, bias))
     travel = log_wheel_travel(log, params or default_params(), correction, bits)
-    d_c = travel.sum(axis=1) / 2.0
-    phi = np.diff(theta)
-    if method == "euler":
-        heading, length = theta[:-1], d_c
-    else:
-        heading = theta[:-1] + phi / 2.0
-        length = d_c * np.sinc(phi / (2.0 * np.pi)) if method == "exact" else d_c
+    dx, dy = _chord(travel.sum(axis=1) / 2.0, np.diff(theta), theta[:-1], method)
     out = np.empty((len(theta), 3))
-    out[:, 0] = start.x + np.concatenate([[0.0], np.cumsum(length * np.cos(heading))])
-    out[:, 1] = start.y + np.concatenate([[0.0], np.cumsum(length * np.sin(heading))])
+    out[:, 0] = start.x + np.concatenate([[0.0], np.cumsum(dx)])
+    out[:, 1] = start.y + np.concatenate([[0.0], np.cumsum(dy)])
     out[:, 2] = geometry.wrap_angle(theta)
     return out
 

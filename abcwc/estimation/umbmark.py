@@ -133,7 +133,7 @@ def alpha_beta(cg_cw: np.ndarray, cg_ccw: np.ndarray, side: float,
     """
     if not side > 0:
         raise ValueError(f"side must be > 0 m, got {side!r}")
-    (x_cw, y_cw), (x_ccw, y_ccw) = np.asarray(cg_cw, float)[:2], np.asarray(cg_ccw, float)[:2]
+    (x_cw, y_cw), (x_ccw, y_ccw) = _centre(cg_cw, "cg_cw"), _centre(cg_ccw, "cg_ccw")
     alpha_x, beta_x = (x_cw + x_ccw) / (-4.0 * side), (x_cw - x_ccw) / (-4.0 * side)
     alpha_y, beta_y = (y_cw - y_ccw) / (-4.0 * side), (y_cw + y_ccw) / (-4.0 * side)
     if use == "x":
@@ -145,6 +145,15 @@ def alpha_beta(cg_cw: np.ndarray, cg_ccw: np.ndarray, side: float,
     raise ValueError(f"use must be 'x', 'y' or 'xy', got {use!r}")
 
 
+def _centre(cg: np.ndarray, name: str) -> np.ndarray:
+    """A centre of gravity ``(x, y)`` (m) from ``(x, y)`` or ``(x, y, theta)``; ValueError
+    unless finite."""
+    arr = np.asarray(cg, dtype=float)
+    if arr.shape not in ((2,), (3,)) or not np.isfinite(arr[:2]).all():
+        raise ValueError(f"{name} must be a finite (x, y) in metres, got {cg!r}")
+    return arr[:2]
+
+
 def curve_radius(beta: float, side: float) -> float:
     """Radius (m) of the "straight" legs: ``R = (L/2) / sin(beta/2)`` (eqn 5.11).
 
@@ -153,6 +162,8 @@ def curve_radius(beta: float, side: float) -> float:
     """
     if not side > 0:
         raise ValueError(f"side must be > 0 m, got {side!r}")
+    if not math.isfinite(beta):
+        raise ValueError(f"beta must be a finite angle (rad), got {beta!r}")
     return math.inf if beta == 0.0 else (side / 2) / math.sin(beta / 2)
 
 
@@ -232,6 +243,10 @@ def model_return_error(side: float, wheel_base: float, e_d: float, e_b: float,
     ``alpha = pi/2 (1 - 1/E_b)``; ``beta = 2 asin(L / 2R)`` with the R for which
     ``(R + b/2)/(R - b/2) = E_d`` (b the actual wheel base, ``E_b b``).
     """
+    values = {"side": side, "wheel_base": wheel_base, "e_d": e_d, "e_b": e_b}
+    for name, value in values.items():
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
     alpha = math.pi / 2 * (1.0 - 1.0 / e_b)
     if e_d == 1.0:
         beta = 0.0

@@ -9,19 +9,24 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from abcwc.geometry import encoder_ticks_to_wheel_distance
+from abcwc.geometry import encoder_ticks_to_wheel_distance, inverse_transform_points
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.viz._common import decimate
 
 
 def true_velocity(log: RunLog) -> tuple[np.ndarray, np.ndarray]:
-    """Forward speed v (m/s) and turn rate w (rad/s) per row from the true poses."""
+    """Forward speed v (m/s) and turn rate w (rad/s) per row from the true poses.
+
+    v is the x (forward) part of each row's world displacement seen from the chair's
+    heading; w the heading's rate of change, unwrapped.
+    """
     pose, dt = log.pose, log.period or 1.0
     if len(pose) < 2:
         return np.zeros(len(pose)), np.zeros(len(pose))
-    dx, dy = np.gradient(pose[:, 0]), np.gradient(pose[:, 1])
-    v = (np.cos(pose[:, 2]) * dx + np.sin(pose[:, 2]) * dy) / dt
+    moved = np.column_stack([np.gradient(pose[:, 0]), np.gradient(pose[:, 1])])
+    headings = np.column_stack([np.zeros((len(pose), 2)), pose[:, 2]])
+    v = inverse_transform_points(headings, moved)[:, 0] / dt
     return v, np.gradient(np.unwrap(pose[:, 2])) / dt
 
 

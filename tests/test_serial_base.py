@@ -17,7 +17,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from abcwc.base import Base, connect
+from abcwc.base import Base
+from abcwc.connect import connect
 from abcwc.control.velocity import twist_to_pot_command
 from abcwc.hw import protocol as P
 from abcwc.hw import serial_base as sb

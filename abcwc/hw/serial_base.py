@@ -39,6 +39,7 @@ from abcwc.control.interface_board import check_speed_cap
 from abcwc.control.velocity import twist_to_pot_command, twist_to_wire_units
 from abcwc.hw import protocol as P
 from abcwc.log import RunLog
+from abcwc.params import ChairParams, default_params
 from abcwc.types import PotCommand, SensorFrame, StatusFlags, Twist
 
 __all__ = [
@@ -138,6 +139,8 @@ class SerialBase:
             (:data:`DEFAULT_SPEED_CAP`, ~0.5 m/s), the safe default for course
             cells that drive the real chair.
         ready_timeout: seconds to wait for the firmware's HELLO after opening.
+        params: the chair's parameters (default: ``data/chair.toml``'s, the
+            thesis chair's), for code that turns counts into metres and the like.
 
     Frames have ``pose=None`` (no ground truth), IR ranges NaN (not wired to the
     firmware) and ``sonar`` NaN while the sonar gives no echo. ``t`` is chair time
@@ -156,7 +159,9 @@ class SerialBase:
         timeout: float = 1.0,
         speed_cap: int | None = None,
         ready_timeout: float = 3.0,
+        params: ChairParams | None = None,
     ):
+        self.params = params or default_params()
         self.port_name = str(port)
         self.baudrate = baudrate
         self.timeout = float(timeout)

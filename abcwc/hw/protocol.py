@@ -54,6 +54,7 @@ __all__ = [
     "Telemetry",
     "Message",
     "ProtocolError",
+    "VersionMismatch",
     "crc16",
     "cobs_encode",
     "cobs_decode",
@@ -135,6 +136,14 @@ class HelloReason:
 
 class ProtocolError(ValueError):
     """A frame or a field value that the protocol does not allow."""
+
+
+class VersionMismatch(ProtocolError):
+    """A well-formed frame of another protocol version (``version`` holds it)."""
+
+    def __init__(self, version: int):
+        super().__init__(f"protocol version {version}, expected {PROTOCOL_VERSION}")
+        self.version = version
 
 
 # --- messages -----------------------------------------------------------------------
@@ -416,7 +425,7 @@ def decode_frame(frame: bytes) -> Message:
         raise ProtocolError(f"CRC mismatch: frame says {crc:#06x}, bytes give {crc16(body):#06x}")
     version, mtype, seq = _HEADER.unpack(body[:3])
     if version != PROTOCOL_VERSION:
-        raise ProtocolError(f"protocol version {version}, expected {PROTOCOL_VERSION}")
+        raise VersionMismatch(version)
     cls = _CLASSES.get(mtype)
     if cls is None:
         raise ProtocolError(f"unknown message type {mtype:#04x}")
@@ -433,7 +442,9 @@ class FrameDecoder:
     """Streaming decoder: feed it bytes as they come, get whole messages back.
 
     Bad frames are dropped and counted in ``bad_frames``, with the reason of the
-    last one in ``last_error``; the decoder resynchronises at the next 0x00.
+    last one in ``last_error``; the decoder resynchronises at the next 0x00. The
+    protocol versions of well-formed frames of another version collect in
+    ``other_versions`` (firmware that does not match this library).
     Empty frames (two delimiters in a row) are ignored and not counted, the same
     rules as the chair's parser.
     """
@@ -445,6 +456,8 @@ class FrameDecoder:
         """Frames dropped so far."""
         self.last_error: str | None = None
         """Why the last bad frame was dropped."""
+        self.other_versions: set[int] = set()
+        """Protocol versions seen in frames of another version."""
 
     def feed(self, data: bytes) -> list[Message]:
         """Consume ``data``; return the messages completed by it, in order."""
@@ -465,6 +478,8 @@ class FrameDecoder:
             except ProtocolError as exc:
                 self.bad_frames += 1
                 self.last_error = str(exc)
+                if isinstance(exc, VersionMismatch):
+                    self.other_versions.add(exc.version)
             self._buf.clear()
             self._overflow = False
         return out

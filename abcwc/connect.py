@@ -5,6 +5,9 @@ real chair over USB serial (:class:`abcwc.hw.serial_base.SerialBase`) and
 ``connect("simavr")`` our firmware on a simulated Arduino driving the simulated chair
 (:class:`abcwc.hw.fil_base.FirmwareInLoopBase`); all three are a
 :class:`abcwc.base.Base`. The bodies are imported only when asked for.
+
+The package exports these names, so ``abcwc.connect`` is the function: import from
+this module with ``from abcwc.connect import ...`` (not ``import abcwc.connect as m``).
 """
 
 from __future__ import annotations

@@ -5,7 +5,8 @@ the real one, through the same interface; ``with abcwc.hardware_chair() as real:
 course cell's speed-capped real chair (``ABCWC_PORT``), or ``None`` when there is none.
 """
 
-from abcwc.base import connect, hardware_chair
+from abcwc.base import Base
+from abcwc.connect import HARDWARE_CELL_CAP, PORT_ENV, SIMAVR_PORT, connect, hardware_chair
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.types import LaserScan, Pose2D, PotCommand, SensorFrame, StatusFlags, Twist
@@ -13,6 +14,10 @@ from abcwc.types import LaserScan, Pose2D, PotCommand, SensorFrame, StatusFlags,
 __version__ = "0.1.0"
 
 __all__ = [
+    "HARDWARE_CELL_CAP",
+    "PORT_ENV",
+    "SIMAVR_PORT",
+    "Base",
     "ChairParams",
     "LaserScan",
     "Pose2D",

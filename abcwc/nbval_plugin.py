@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pytest
 
-from abcwc.base import SIMAVR_PORT
+from abcwc.connect import SIMAVR_PORT
 from abcwc.paths import REPO_ROOT as ROOT
 
 

@@ -81,7 +81,7 @@ class TeleopPanel:
                 or refresh_steps < 1:
             raise ValueError(f"refresh_steps must be a positive integer, got {refresh_steps!r}")
         self.chair = chair
-        self.params = getattr(chair, "params", None) or default_params()
+        self.params = chair.params
         self.world = world if world is not None else getattr(chair, "world", None)
         self.refresh_steps = refresh_steps
         self.view = view

@@ -17,7 +17,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from abcwc.base import Base, connect
+from abcwc.base import Base
+from abcwc.connect import connect
 from abcwc.control.velocity import twist_to_pot_command
 from abcwc.hw import protocol as P
 from abcwc.hw import serial_base as sb
@@ -365,7 +366,7 @@ def test_hardware_chair_on_the_firmware_in_simavr(harness_files, monkeypatch, ca
             log = real.drive(PotCommand(253, 128), seconds=2.0)
             raise RuntimeError("cell failed")
     assert "simavr" in capsys.readouterr().out
-    assert real._proc is None and real._closed  # harness gone, link closed
+    assert real._proc is None and real.link.closed  # harness gone, link closed
     assert (log.pots[:, 0] <= 148).all() and log.pots[-1, 0] == 148  # 128 + cap
     assert (log.flags[-1] & StatusFlags.SPEED_CAPPED)
     moved = log.pose[-1, 0] - start.x
@@ -379,3 +380,27 @@ def test_notebook_kernels_run_hardware_cells_on_the_firmware(harness_files):
     from abcwc.nbval_plugin import KERNEL_ENV
 
     assert KERNEL_ENV["ABCWC_PORT"] == "simavr"
+
+
+# ------------------------------------------------------------------ one interface
+def test_every_body_is_a_base_with_params(realtime_chair, fil):
+    """The simulator, the real chair's SerialBase and the firmware in the loop all
+    satisfy the Base protocol and carry the chair's parameters."""
+    from abcwc.hw.link import SerialLink
+    from abcwc.params import ChairParams
+    from abcwc.sim.base import SimBase
+
+    with SerialBase(realtime_chair.pty, speed_cap=125) as serial:
+        bodies = {"sim": SimBase(BOX, people=False), "serial": serial, "fil": fil}
+        for name, body in bodies.items():
+            assert isinstance(body, Base), name
+            assert isinstance(body.params, ChairParams), name
+            assert body.period == body.params.control_period == 0.02, name
+            assert body.read() is body.frame, name
+            log = body.drive(PotCommand(140, 128), 0.1)
+            assert len(log.t) == 5 and tuple(log.cmd_pots[-1]) == (140, 128), name
+            assert body.last_command == PotCommand(140, 128), name
+    assert serial.link.closed  # the with block closed it
+    # The firmware in the loop is made of a simulator and a link, not a SerialBase.
+    assert isinstance(fil.sim, SimBase) and isinstance(fil.link, SerialLink)
+    assert not isinstance(fil, SerialBase)

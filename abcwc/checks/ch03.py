@@ -105,7 +105,7 @@ def wander_check(make_controller: object) -> str:
     pose is removed from every frame, as on the real chair. Each run must end with no
     collision and at least :data:`WANDER_MIN_DISTANCE` metres driven.
     """
-    from abcwc.base import connect
+    from abcwc.connect import connect
 
     total = 0.0
     for place, seed in WANDER_RUNS:

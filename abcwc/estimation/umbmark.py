@@ -62,7 +62,6 @@ import numpy as np
 
 from abcwc.estimation.odometry import Odometry
 from abcwc.geometry import wrap_angle
-from abcwc.params import default_params
 from abcwc.paths import data_dir
 from abcwc.types import Pose2D, SensorFrame, Twist
 
@@ -376,7 +375,7 @@ def run_square(base, direction: str, side: float = THESIS_SIDE,
     """
     if not (chunk > 0 and timeout > 0):
         raise ValueError(f"chunk and timeout must be > 0 s, got {chunk!r}, {timeout!r}")
-    params = getattr(base, "params", None) or default_params()
+    params = base.params
     first = base.read()
     odometry = Odometry(params, correction=correction, wheel_base=wheel_base)
     driver = SquareDriver(odometry, side, direction, speed, turn_rate, settle,

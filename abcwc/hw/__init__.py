@@ -1,1 +1,10 @@
-"""Talking to the real chair: the serial wire protocol (``abcwc.hw.protocol``)."""
+"""Talking to the real chair: the wire protocol (:mod:`abcwc.hw.protocol`), the serial
+link (:mod:`abcwc.hw.link`), the real chair's body (:class:`SerialBase`) and the
+firmware in the loop (:mod:`abcwc.hw.fil_base`, imported on its own: it brings the
+simulator)."""
+
+from abcwc.hw.link import ChairLinkError, NoSuchPortError, ProtocolVersionError, SerialLink
+from abcwc.hw.serial_base import SerialBase
+
+__all__ = ["ChairLinkError", "NoSuchPortError", "ProtocolVersionError", "SerialBase",
+           "SerialLink"]

@@ -1,11 +1,11 @@
 """FirmwareInLoopBase: the real firmware image driving the simulated chair.
 
 ``firmware/build/abcwc_harness`` runs ``abcwc_firmware.elf`` on a simulated
-ATmega2560 (simavr) with its UART0 on a pseudo-terminal. This class talks to that
-pty with the :class:`~abcwc.hw.serial_base.SerialBase` machinery (the same frames,
-HELLO handshake, version check and telemetry decoding as on the real chair) and
-co-simulates the pymunk chair of :class:`abcwc.sim.SimBase` in lock-step. Every
-20 ms control period:
+ATmega2560 (simavr) with its UART0 on a pseudo-terminal. This body is made of a
+:class:`~abcwc.hw.link.SerialLink` on that pty (the same frames, HELLO handshake,
+version check and telemetry decoding as on the real chair) and a
+:class:`abcwc.sim.SimBase`, the pymunk chair co-simulated in lock-step. Every 20 ms
+control period:
 
 1. the pending host command (if any) is written to the pty;
 2. the harness advances the AVR 20 ms (``A 20 <bytes sent>``: the host's bytes are
@@ -31,12 +31,12 @@ import subprocess
 import time
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 from abcwc.hw import protocol as P
-from abcwc.hw.serial_base import ChairLinkError, SerialBase
-from abcwc.params import ChairParams
+from abcwc.hw.link import ChairLinkError, SerialLink
+from abcwc.hw.serial_base import LinkedBody
 from abcwc.sim.base import SimBase
-from abcwc.sim.motor import ChairErrors
 from abcwc.sim.world import World
 from abcwc.types import Pose2D, PotCommand, SensorFrame
 
@@ -99,12 +99,11 @@ def build_harness(firmware_dir: Path = FIRMWARE_DIR) -> tuple[Path, Path]:
     return build / "abcwc_harness", build / "abcwc_firmware.elf"
 
 
-class FirmwareInLoopBase(SerialBase):
+class FirmwareInLoopBase(LinkedBody):
     """The simulated chair driven by the real firmware. Same surface as SimBase.
 
     Args:
-        world, seed, errors, params, lidar, depth_scan, start, people: as
-            :class:`abcwc.sim.SimBase` (the chair, its errors and its world).
+        world: the simulated world (a name or a :class:`~abcwc.sim.world.World`).
         speed_cap: firmware speed cap in pot bytes from 128 (0..125); ``None``
             leaves the firmware's default, 125 (no cap beyond the safe range), as
             the simulator. This is a simulation: ``ABCWC_SPEED_CAP`` is not read.
@@ -112,9 +111,13 @@ class FirmwareInLoopBase(SerialBase):
             reports written to the pty.
         ready_timeout: simulated seconds to wait for the firmware's HELLO.
         build: run ``make -C firmware harness`` first (quick when up to date).
+        sim_options: ``seed``, ``errors``, ``params``, ``lidar``, ``depth_scan``,
+            ``start``, ``people``: as :class:`abcwc.sim.SimBase` (the chair, its
+            errors and its world).
 
     Attributes:
         sim: the SimBase whose world, motors and sensors are co-simulated.
+        link: the SerialLink to the firmware's UART on the harness's pty.
         wall_time: wall seconds spent in ``step`` so far; ``sim_speed`` the
             simulated seconds per wall second of those steps.
     """
@@ -124,20 +127,14 @@ class FirmwareInLoopBase(SerialBase):
     def __init__(
         self,
         world: str | World = "lab",
-        seed: int = 0,
-        errors: ChairErrors | str | None = "worn",
-        params: ChairParams | None = None,
-        lidar: bool = False,
-        depth_scan: bool = False,
-        start: Pose2D | str | None = None,
-        people: bool = True,
+        *,
         speed_cap: int | None = None,
         timeout: float = HARNESS_REPLY_TIMEOUT,
         ready_timeout: float = 3.0,
         build: bool = True,
+        **sim_options: Any,
     ):
-        self.sim = SimBase(world, seed=seed, errors=errors, params=params, lidar=lidar,
-                           depth_scan=depth_scan, start=start, people=people)
+        self.sim = SimBase(world, **sim_options)
         self.params = self.sim.params
         self.timeout = float(timeout)
         self.ready_timeout = float(ready_timeout)
@@ -145,11 +142,7 @@ class FirmwareInLoopBase(SerialBase):
         if abs(self.sim.period - self.period) > 1e-9:
             raise ValueError(f"the simulator's control period {self.sim.period} s differs "
                              f"from the firmware's telemetry period {self.period} s")
-        self.baudrate = P.BAUD_RATE
-        self._init_state()
         self._proc: subprocess.Popen | None = None
-        self._sent = 0
-        self._received = 0
         self._enc_sent = [0, 0]
         self._inputs: dict[str, str] = {}
         self.wall_time = 0.0
@@ -157,20 +150,16 @@ class FirmwareInLoopBase(SerialBase):
         self.sim_us = 0
         harness, elf = build_harness() if build else (
             FIRMWARE_DIR / "build" / "abcwc_harness", FIRMWARE_DIR / "build" / "abcwc_firmware.elf")
+        pty = self._start_harness(harness, elf)
         try:
-            self._start_harness(harness, elf)
-            self._serial = self._open_port(self.port_name, self.baudrate)
-            self.hello = self._wait_ready()
-            if speed_cap is not None:
-                self.set_speed_cap(speed_cap)
-            self._push_inputs(self.sim.frame.gyro_z)
-            self._frame = self._merge(self._frame_from(self._period_telemetry()))
+            self._connect(pty, speed_cap)
         except BaseException:
-            self._shutdown()
+            self._end_harness()
             raise
 
     # ----------------------------------------------------------------- harness
-    def _start_harness(self, harness: Path, elf: Path) -> None:
+    def _start_harness(self, harness: Path, elf: Path) -> str:
+        """Start the harness; the pty it gives for the firmware's UART."""
         try:
             self._proc = subprocess.Popen(
                 [str(harness), "--mode", "lockstep", str(elf)],
@@ -182,8 +171,36 @@ class FirmwareInLoopBase(SerialBase):
         if not line.startswith("/dev/"):
             self._proc.kill()
             err = self._proc.communicate()[1]
+            self._proc = None
             raise ChairLinkError(f"the harness did not give a pty: {line!r} {err[-2000:]}")
-        self.port_name = line
+        return line
+
+    def _connect(self, pty: str, speed_cap: int | None) -> None:
+        """Open the link on ``pty``, shake hands, set the cap, take the first frame."""
+        self.link = SerialLink(pty, P.BAUD_RATE, self.timeout)
+        try:
+            self._wait_ready()
+            if speed_cap is not None:
+                self.set_speed_cap(speed_cap)
+            self._push_inputs(self.sim.frame.gyro_z)
+            self._frame = self._merge(self.link.frame_from(self._period_telemetry()))
+        except BaseException:
+            self.link.close_port()
+            raise
+
+    def _end_harness(self) -> None:
+        """Ask the harness to quit (kill it if it will not) and reap it."""
+        proc, self._proc = self._proc, None
+        if proc is None:
+            return
+        try:
+            if proc.poll() is None and proc.stdin:
+                proc.stdin.write("Q\n")
+                proc.stdin.flush()
+            proc.communicate(timeout=5)
+        except Exception:  # noqa: BLE001 - make sure it is gone
+            proc.kill()
+            proc.communicate()
 
     def _harness_error(self, line: str, answer: str = "") -> ChairLinkError:
         code = self._proc.poll() if self._proc else None
@@ -205,52 +222,32 @@ class FirmwareInLoopBase(SerialBase):
             raise self._harness_error(line, answer)
         return answer
 
-    def _write(self, data: bytes) -> None:
-        super()._write(data)
-        self._sent += len(data)
-
     def _advance(self, ms: float) -> list:
         """Advance the AVR ``ms`` (after our bytes are in); decode what it sent."""
-        _, sim_us, written = self.harness(f"A {ms:g} {self._sent}").split()
+        _, sim_us, written = self.harness(f"A {ms:g} {self.link.bytes_sent}").split()
         self.sim_us = int(sim_us)
-        target = int(written)
-        deadline = time.monotonic() + self.timeout
-        data = bytearray()
-        while self._received + len(data) < target:
-            chunk = self._read_bytes()
-            data += chunk
-            if not chunk and time.monotonic() > deadline:
-                raise ChairLinkError(
-                    f"firmware harness reported {target} bytes written, only "
-                    f"{self._received + len(data)} arrived on {self.port_name}")
-        self._received += len(data)
-        return self._feed(bytes(data))
+        return self.link.receive_until(int(written), self.timeout)
 
     def _wait_ready(self) -> P.Hello:
-        self._write(b"\x00")
-        self._write_msg(P.HelloRequest)
+        """Ask for HELLO and advance simulated time 10 ms at a time until it comes."""
+        self.link.ask_hello()
         for _ in range(max(1, round(self.ready_timeout * 100))):
-            for msg in self._advance(10):
-                if isinstance(msg, P.Hello):
-                    if msg.protocol_version != P.PROTOCOL_VERSION:
-                        raise self._version_error(msg.protocol_version)
-                    self._telemetry.clear()
-                    self._decoder.bad_frames = 0
-                    return msg
-            if self._seen_versions:
-                raise self._version_error(min(self._seen_versions))
+            hello = self.link.hello_in(self._advance(10))
+            if hello is not None:
+                return hello
         raise ChairLinkError(f"no HELLO from the firmware within {self.ready_timeout:g} s "
                              f"of simulated time")
 
     def _period_telemetry(self) -> P.Telemetry:
         """Advance one period; the newest telemetry frame of it."""
+        telemetry = self.link.telemetry
         self._advance(self.period * 1000)
-        if not self._telemetry:
+        if not telemetry:
             self._advance(self.period * 1000)  # phase slip: take the next one
-        if not self._telemetry:
+        if not telemetry:
             raise ChairLinkError("the firmware sent no telemetry for 40 ms of simulated time")
-        tel = self._telemetry[-1]
-        self._telemetry.clear()
+        tel = telemetry[-1]
+        telemetry.clear()
         return tel
 
     def _set_input(self, key: str, line: str) -> None:
@@ -321,47 +318,26 @@ class FirmwareInLoopBase(SerialBase):
         t0 = time.perf_counter()
         sim = self.sim
         self._set_input("J", f"J {sim.joystick[0]} {sim.joystick[1]}")
-        self._flush_pending()
+        self.link.flush_pending()
         tel = self._period_telemetry()
         pots = self.firmware_pots()
         # the simulated chair runs on the firmware's pots instead of the Python board's
         gyro_z = sim.step_with_pots(pots).gyro_z
         self._push_inputs(gyro_z)
-        self._frame = self._merge(self._frame_from(tel))
+        self._frame = self._merge(self.link.frame_from(tel))
         self.sim_steps += 1
         self.wall_time += time.perf_counter() - t0
         return self._frame
 
     def log_meta(self) -> dict:
-        meta = super().log_meta()
-        meta.update(world=self.sim.world.name, seed=self.sim.seed,
-                    errors={k: getattr(self.sim.errors, k)
-                            for k in self.sim.errors.__dataclass_fields__})
-        return meta
-
-    def _shutdown(self) -> None:
-        self._close_port()
-        proc, self._proc = self._proc, None
-        if proc is None:
-            return
-        try:
-            if proc.poll() is None and proc.stdin:
-                proc.stdin.write("Q\n")
-                proc.stdin.flush()
-            proc.communicate(timeout=5)
-        except Exception:  # noqa: BLE001 - make sure it is gone
-            proc.kill()
-            proc.communicate()
+        sim = self.sim.log_meta()
+        return {**super().log_meta(), "world": sim["world"], "seed": sim["seed"],
+                "errors": sim["errors"]}
 
     def close(self) -> None:
         """Stop, close the pty and end the harness (safe to call twice)."""
-        if self._closed:
-            return
-        super().close()
-        self._shutdown()
-
-    def __enter__(self) -> FirmwareInLoopBase:
-        return self
+        self.link.close()
+        self._end_harness()
 
     def __repr__(self) -> str:
         return (f"FirmwareInLoopBase(world={self.sim.world.name!r}, seed={self.sim.seed}, "

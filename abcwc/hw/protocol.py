@@ -26,18 +26,19 @@ Example::
 
 from __future__ import annotations
 
+import binascii
 import struct
-from dataclasses import dataclass, fields
-from typing import ClassVar
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields
+from enum import IntEnum
+from typing import Any, ClassVar
 
 from abcwc.geometry import wrap_tick_delta
-from abcwc.params import default_params
 
 __all__ = [
     "PROTOCOL_VERSION",
     "BAUD_RATE",
     "MsgType",
-    "Flag",
     "HelloReason",
     "POT_NEUTRAL",
     "JOY_CENTRE",
@@ -54,6 +55,7 @@ __all__ = [
     "Telemetry",
     "Message",
     "ProtocolError",
+    "VersionMismatch",
     "crc16",
     "cobs_encode",
     "cobs_decode",
@@ -66,22 +68,21 @@ __all__ = [
 PROTOCOL_VERSION = 1
 BAUD_RATE = 115200
 
-# --- defaults and scales the messages carry (the chair's own numbers: data/chair.toml;
-# the pot maps and the velocity controller are abcwc.control's, shared with the firmware)
-_CHAIR = default_params()
-POT_NEUTRAL = _CHAIR.pot_neutral
+# --- the firmware's constants (firmware/core/pots.h, chair_core.h); they agree with
+# data/chair.toml (tests/test_protocol.py checks both)
+POT_NEUTRAL = 128
 """Pot byte for no motion on either channel."""
-POT_MAX_OFFSET = _CHAIR.pot_full_scale_offset
+POT_MAX_OFFSET = 125
 """Largest |pot byte - 128|: a speed cap of this many bytes is no cap."""
-JOY_CENTRE = _CHAIR.joystick_centre
+JOY_CENTRE = 254
 """Joystick ADC reading at rest, on the thesis's "pot scale"."""
-TELEMETRY_PERIOD_MS = round(_CHAIR.control_period * 1000)
-"""Default telemetry period, ms (50 Hz)."""
+TELEMETRY_PERIOD_MS = 20
+"""Default telemetry period, ms (50 Hz), the control period."""
 GYRO_LSB_PER_DEG_S = 65.5
 """MPU9250 gyro scale at +-500 deg/s: raw counts per deg/s."""
 
 
-class MsgType:
+class MsgType(IntEnum):
     """Message type bytes. Host -> chair are below 0x80, chair -> host above."""
 
     HEARTBEAT = 0x01
@@ -94,38 +95,7 @@ class MsgType:
     TELEMETRY = 0x82
 
 
-class Flag:
-    """Bits of ``Telemetry.flags``."""
-
-    JOYSTICK_OVERRIDE = 0x01
-    """The joystick is deflected and drives the pots."""
-    WATCHDOG_TRIPPED = 0x02
-    """No valid frame for 250 ms: the host command was dropped, pots neutral."""
-    JOYSTICK_FAULT = 0x04
-    """A joystick reading is implausible (disconnected?): pots neutral."""
-    IMU_FAULT = 0x08
-    """The gyro did not answer; gyro_z_raw is 0."""
-    SPEED_CAPPED = 0x10
-    """The host command was limited by the speed cap or the safe range."""
-    HOST_ACTIVE = 0x20
-    """The pots follow a host command."""
-
-    NAMES: ClassVar[dict[int, str]] = {
-        0x01: "JOYSTICK_OVERRIDE",
-        0x02: "WATCHDOG_TRIPPED",
-        0x04: "JOYSTICK_FAULT",
-        0x08: "IMU_FAULT",
-        0x10: "SPEED_CAPPED",
-        0x20: "HOST_ACTIVE",
-    }
-
-    @classmethod
-    def describe(cls, flags: int) -> list[str]:
-        """Names of the bits set in ``flags``, lowest bit first."""
-        return [name for bit, name in cls.NAMES.items() if flags & bit]
-
-
-class HelloReason:
+class HelloReason(IntEnum):
     """Why the chair sent a HELLO."""
 
     BOOT = 0
@@ -137,59 +107,84 @@ class ProtocolError(ValueError):
     """A frame or a field value that the protocol does not allow."""
 
 
+class VersionMismatch(ProtocolError):
+    """A well-formed frame of another protocol version (``version`` holds it)."""
+
+    def __init__(self, version: int):
+        super().__init__(f"protocol version {version}, expected {PROTOCOL_VERSION}")
+        self.version = version
+
+
 # --- messages -----------------------------------------------------------------------
 
 
+def _wire(code: str, default: int = 0) -> Any:
+    """A message field, with its struct code on the wire (``B`` uint8, ``h`` int16,
+    ``H`` uint16, ``i`` int32, ``I`` uint32)."""
+    return field(default=default, metadata={"wire": code})
+
+
 @dataclass(frozen=True)
-class Heartbeat:
-    """Host -> chair: keeps the chair's 250 ms watchdog fed, nothing else."""
+class _Frame:
+    """What every message has: the sender's frame counter, wrapping at 256.
+
+    ``TYPE`` is its type byte and ``FORMAT`` the struct format of its payload, made
+    from its fields' wire codes by :func:`_message`.
+    """
 
     seq: int = 0
-    TYPE: ClassVar[int] = MsgType.HEARTBEAT
-    FORMAT: ClassVar[str] = "<"
+    TYPE: ClassVar[MsgType]
+    FORMAT: ClassVar[str]
 
 
-@dataclass(frozen=True)
-class SetPots:
+def _message(mtype: MsgType) -> Callable[[type], type]:
+    """Make a :class:`_Frame` subclass a frozen message of type ``mtype``."""
+
+    def make(cls: type) -> type:
+        cls = dataclass(frozen=True)(cls)
+        cls.TYPE = mtype
+        cls.FORMAT = "<" + "".join(f.metadata["wire"] for f in fields(cls) if f.name != "seq")
+        return cls
+
+    return make
+
+
+@_message(MsgType.HEARTBEAT)
+class Heartbeat(_Frame):
+    """Host -> chair: keeps the chair's 250 ms watchdog fed, nothing else."""
+
+
+@_message(MsgType.SET_POTS)
+class SetPots(_Frame):
     """Host -> chair: drive the pots directly.
 
     ``fb`` and ``lr`` are pot bytes 0..255 (128 neutral; FB above 128 forward,
     LR below 128 turns left). The chair clamps them into 8..253 and the speed cap.
     """
 
-    seq: int = 0
-    fb: int = POT_NEUTRAL
-    lr: int = POT_NEUTRAL
-    TYPE: ClassVar[int] = MsgType.SET_POTS
-    FORMAT: ClassVar[str] = "<BB"
+    fb: int = _wire("B", POT_NEUTRAL)
+    lr: int = _wire("B", POT_NEUTRAL)
 
 
-@dataclass(frozen=True)
-class SetTwist:
+@_message(MsgType.SET_TWIST)
+class SetTwist(_Frame):
     """Host -> chair: drive at a linear speed ``v_mm_s`` (mm/s, + forward) and a
     turn rate ``w_mrad_s`` (mrad/s, + counter-clockwise), both int16.
 
     The chair turns it into pot bytes with ``twist_to_pot_bytes_int``.
     """
 
-    seq: int = 0
-    v_mm_s: int = 0
-    w_mrad_s: int = 0
-    TYPE: ClassVar[int] = MsgType.SET_TWIST
-    FORMAT: ClassVar[str] = "<hh"
+    v_mm_s: int = _wire("h")
+    w_mrad_s: int = _wire("h")
 
 
-@dataclass(frozen=True)
-class Stop:
+@_message(MsgType.STOP)
+class Stop(_Frame):
     """Host -> chair: pots to neutral now (the host stays in charge)."""
 
-    seq: int = 0
-    TYPE: ClassVar[int] = MsgType.STOP
-    FORMAT: ClassVar[str] = "<"
 
-
-@dataclass(frozen=True)
-class Configure:
+@_message(MsgType.CONFIGURE)
+class Configure(_Frame):
     """Host -> chair: speed caps and telemetry rate.
 
     ``cap_fb`` / ``cap_lr``: the largest |pot byte - 128| allowed for host
@@ -198,38 +193,29 @@ class Configure:
     means 10).
     """
 
-    seq: int = 0
-    cap_fb: int = POT_MAX_OFFSET
-    cap_lr: int = POT_MAX_OFFSET
-    telemetry_period_ms: int = 0
-    TYPE: ClassVar[int] = MsgType.CONFIGURE
-    FORMAT: ClassVar[str] = "<BBB"
+    cap_fb: int = _wire("B", POT_MAX_OFFSET)
+    cap_lr: int = _wire("B", POT_MAX_OFFSET)
+    telemetry_period_ms: int = _wire("B")
 
 
-@dataclass(frozen=True)
-class HelloRequest:
+@_message(MsgType.HELLO_REQUEST)
+class HelloRequest(_Frame):
     """Host -> chair: please send a HELLO now."""
 
-    seq: int = 0
-    TYPE: ClassVar[int] = MsgType.HELLO_REQUEST
-    FORMAT: ClassVar[str] = "<"
 
-
-@dataclass(frozen=True)
-class Hello:
+@_message(MsgType.HELLO)
+class Hello(_Frame):
     """Chair -> host: sent at boot, on request, and every 500 ms until the
-    host's first valid frame. ``reset_flags`` is the AVR's MCUSR at boot
-    (1 power-on, 2 external/reset button, 4 brown-out, 8 watchdog)."""
+    host's first valid frame. ``reason`` is a :class:`HelloReason`;
+    ``reset_flags`` is the AVR's MCUSR at boot (1 power-on, 2 external/reset
+    button, 4 brown-out, 8 watchdog)."""
 
-    seq: int = 0
-    protocol_version: int = PROTOCOL_VERSION
-    fw_major: int = 0
-    fw_minor: int = 0
-    fw_patch: int = 0
-    reason: int = HelloReason.BOOT
-    reset_flags: int = 0
-    TYPE: ClassVar[int] = MsgType.HELLO
-    FORMAT: ClassVar[str] = "<BBBBBB"
+    protocol_version: int = _wire("B", PROTOCOL_VERSION)
+    fw_major: int = _wire("B")
+    fw_minor: int = _wire("B")
+    fw_patch: int = _wire("B")
+    reason: int = _wire("B", HelloReason.BOOT)
+    reset_flags: int = _wire("B")
 
     @property
     def fw_version(self) -> str:
@@ -237,8 +223,8 @@ class Hello:
         return f"{self.fw_major}.{self.fw_minor}.{self.fw_patch}"
 
 
-@dataclass(frozen=True)
-class Telemetry:
+@_message(MsgType.TELEMETRY)
+class Telemetry(_Frame):
     """Chair -> host, every 20 ms by default.
 
     Attributes:
@@ -250,31 +236,28 @@ class Telemetry:
         sonar_mm: sonar range, mm; 0 = no reading in the last 300 ms.
         joy_fb, joy_lr: joystick ADC readings, pot scale (centre 254).
         pot_fb, pot_lr: the pot bytes the chair is driving.
-        flags: ``Flag`` bits.
+        flags: :class:`abcwc.types.StatusFlags` bits.
         bad_frames: frames the chair dropped since boot (uint16, wraps).
         last_cmd_seq: seq of the last valid host frame.
         loops: main-loop passes since the previous telemetry.
         cap_fb, cap_lr: the speed caps in force.
     """
 
-    seq: int = 0
-    time_ms: int = 0
-    enc_left: int = 0
-    enc_right: int = 0
-    gyro_z_raw: int = 0
-    sonar_mm: int = 0
-    joy_fb: int = JOY_CENTRE
-    joy_lr: int = JOY_CENTRE
-    pot_fb: int = POT_NEUTRAL
-    pot_lr: int = POT_NEUTRAL
-    flags: int = 0
-    bad_frames: int = 0
-    last_cmd_seq: int = 0
-    loops: int = 0
-    cap_fb: int = POT_MAX_OFFSET
-    cap_lr: int = POT_MAX_OFFSET
-    TYPE: ClassVar[int] = MsgType.TELEMETRY
-    FORMAT: ClassVar[str] = "<IiihHHHBBBHBHBB"
+    time_ms: int = _wire("I")
+    enc_left: int = _wire("i")
+    enc_right: int = _wire("i")
+    gyro_z_raw: int = _wire("h")
+    sonar_mm: int = _wire("H")
+    joy_fb: int = _wire("H", JOY_CENTRE)
+    joy_lr: int = _wire("H", JOY_CENTRE)
+    pot_fb: int = _wire("B", POT_NEUTRAL)
+    pot_lr: int = _wire("B", POT_NEUTRAL)
+    flags: int = _wire("B")
+    bad_frames: int = _wire("H")
+    last_cmd_seq: int = _wire("B")
+    loops: int = _wire("H")
+    cap_fb: int = _wire("B", POT_MAX_OFFSET)
+    cap_lr: int = _wire("B", POT_MAX_OFFSET)
 
     @property
     def gyro_z_rad_s(self) -> float:
@@ -304,25 +287,11 @@ MAX_ENCODED = MAX_RAW + MAX_RAW // 254 + 1
 # --- CRC and COBS -------------------------------------------------------------------
 
 
-def _make_crc_table() -> list[int]:
-    table = []
-    for byte in range(256):
-        crc = byte << 8
-        for _ in range(8):
-            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else (crc << 1)
-            crc &= 0xFFFF
-        table.append(crc)
-    return table
-
-
-_CRC_TABLE = _make_crc_table()
-
-
 def crc16(data: bytes, crc: int = 0xFFFF) -> int:
-    """CRC-16/CCITT-FALSE of ``data`` (``crc16(b"123456789") == 0x29B1``)."""
-    for byte in data:
-        crc = ((crc << 8) & 0xFFFF) ^ _CRC_TABLE[(crc >> 8) ^ byte]
-    return crc
+    """CRC-16/CCITT-FALSE of ``data``: polynomial 0x1021, initial value 0xFFFF, no
+    reflection, no final XOR (``crc16(b"123456789") == 0x29B1``). It is
+    :func:`binascii.crc_hqx` started at 0xFFFF; ``crc`` carries a running CRC on."""
+    return binascii.crc_hqx(data, crc)
 
 
 def cobs_encode(data: bytes) -> bytes:
@@ -416,7 +385,7 @@ def decode_frame(frame: bytes) -> Message:
         raise ProtocolError(f"CRC mismatch: frame says {crc:#06x}, bytes give {crc16(body):#06x}")
     version, mtype, seq = _HEADER.unpack(body[:3])
     if version != PROTOCOL_VERSION:
-        raise ProtocolError(f"protocol version {version}, expected {PROTOCOL_VERSION}")
+        raise VersionMismatch(version)
     cls = _CLASSES.get(mtype)
     if cls is None:
         raise ProtocolError(f"unknown message type {mtype:#04x}")
@@ -433,7 +402,9 @@ class FrameDecoder:
     """Streaming decoder: feed it bytes as they come, get whole messages back.
 
     Bad frames are dropped and counted in ``bad_frames``, with the reason of the
-    last one in ``last_error``; the decoder resynchronises at the next 0x00.
+    last one in ``last_error``; the decoder resynchronises at the next 0x00. The
+    protocol versions of well-formed frames of another version collect in
+    ``other_versions`` (firmware that does not match this library).
     Empty frames (two delimiters in a row) are ignored and not counted, the same
     rules as the chair's parser.
     """
@@ -445,6 +416,8 @@ class FrameDecoder:
         """Frames dropped so far."""
         self.last_error: str | None = None
         """Why the last bad frame was dropped."""
+        self.other_versions: set[int] = set()
+        """Protocol versions seen in frames of another version."""
 
     def feed(self, data: bytes) -> list[Message]:
         """Consume ``data``; return the messages completed by it, in order."""
@@ -465,6 +438,8 @@ class FrameDecoder:
             except ProtocolError as exc:
                 self.bad_frames += 1
                 self.last_error = str(exc)
+                if isinstance(exc, VersionMismatch):
+                    self.other_versions.add(exc.version)
             self._buf.clear()
             self._overflow = False
         return out

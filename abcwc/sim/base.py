@@ -19,10 +19,9 @@ import math
 import numpy as np
 import pymunk
 
-from abcwc.base import Controller, run_controller
+from abcwc.base import BodyMixin
 from abcwc.control.interface_board import InterfaceBoard
 from abcwc.geometry import wrap_angle
-from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.sim.motor import ChairErrors, MotorController, resolve_errors
 from abcwc.sim.people import PERSON_COLLISION_TYPE, Walker, circles_of
@@ -38,13 +37,14 @@ GRAVITY = 9.81
 PHYSICS_SUBSTEPS = 1  # 20 ms steps: the tyres never need more than their grip
 
 
-
-class SimBase:
+class SimBase(BodyMixin):
     """The simulated chair. Same surface as the real one (:class:`abcwc.hw.SerialBase`).
 
     ``send`` a PotCommand or Twist, ``step`` one control period, read the SensorFrame;
     or ``run(controller, seconds)``. The same ``seed`` gives the same run.
     """
+
+    run_verb = "simulating"
 
     def __init__(
         self,
@@ -155,15 +155,6 @@ class SimBase:
         return Pose2D(x, y, wrap_angle(self.chair.angle))
 
     @property
-    def frame(self) -> SensorFrame:
-        """The latest SensorFrame."""
-        return self._frame
-
-    def read(self) -> SensorFrame:
-        """The latest SensorFrame (same as :attr:`frame`)."""
-        return self._frame
-
-    @property
     def last_command(self) -> PotCommand | None:
         """The last host command as pot bytes (before the board's clamps and cap)."""
         return self.board.last_command
@@ -270,18 +261,6 @@ class SimBase:
         )
 
     # ----------------------------------------------------------------- runs
-    def run(self, controller: Controller, seconds: float, progress: bool = False) -> RunLog:
-        """Call ``controller(frame)`` every period for ``seconds``; send what it returns.
-
-        The controller returns a PotCommand, a Twist, or None (send nothing: after
-        250 ms the watchdog stops the chair). Returns the whole run as a RunLog.
-        """
-        return run_controller(self, controller, seconds, progress, verb="simulating")
-
-    def drive(self, command: PotCommand | Twist, seconds: float) -> RunLog:
-        """Send the same command every period for ``seconds``."""
-        return self.run(lambda frame: command, seconds)
-
     def log_meta(self) -> dict:
         """What a log needs to say where it came from."""
         e = self.errors
@@ -290,12 +269,3 @@ class SimBase:
             "period": self.period, "start_time": self.t,
             "errors": {k: getattr(e, k) for k in e.__dataclass_fields__},
         }
-
-    def close(self) -> None:
-        """Nothing to release for the simulator; present for the Base interface."""
-
-    def __enter__(self) -> SimBase:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()

@@ -21,8 +21,9 @@ tyre surface, so they measure the tyre's travel before slip.
 from __future__ import annotations
 
 import math
+import numbers
 from collections import deque
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -51,18 +52,16 @@ class ChairErrors:
     slip_std: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in (
-            "drive_wheel_left",
-            "drive_wheel_right",
-            "encoder_wheel_left",
-            "encoder_wheel_right",
-            "wheel_base",
-        ):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and 0.5 <= value <= 1.5):
-                raise ValueError(f"ChairErrors.{name} {value!r} outside 0.5..1.5 (a ratio)")
-        if not (isinstance(self.slip_std, (int, float)) and 0 <= self.slip_std <= 0.2):
-            raise ValueError(f"ChairErrors.slip_std {self.slip_std!r} outside 0..0.2")
+        """Check every field is a real number in its range; store it as a float
+        (so numpy scalars, an ``np.uint8(1)`` too, become plain floats)."""
+        for f in fields(self):
+            value = getattr(self, f.name)
+            low, high, unit = ((0.0, 0.2, "") if f.name == "slip_std"
+                               else (0.5, 1.5, " (a ratio)"))
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+                    or not low <= value <= high:
+                raise ValueError(f"ChairErrors.{f.name} {value!r} outside {low:g}..{high:g}{unit}")
+            object.__setattr__(self, f.name, float(value))
 
     @classmethod
     def ideal(cls) -> ChairErrors:

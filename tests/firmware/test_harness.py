@@ -12,6 +12,7 @@ from firmware_helpers import Harness, make, random_bytes, require_tools
 
 from abcwc.control import joystick_adc_to_pot_byte, twist_to_pot_bytes_int
 from abcwc.hw import protocol as P
+from abcwc.types import StatusFlags
 
 LOOP_MS = 1.5
 """Longest main-loop pass seen in simulation (about 0.5 ms; SPI bytes take
@@ -43,7 +44,7 @@ def test_boot_hello_and_telemetry(chair):
     assert all(19 <= p <= 21 for p in periods), periods  # 50 Hz
     last = tel[-1]
     assert (last.pot_fb, last.pot_lr) == (128, 128)
-    assert last.flags == 0, P.Flag.describe(last.flags)
+    assert last.flags == 0, StatusFlags(last.flags)
     assert chair.decoder.bad_frames == 0
     assert chair.pots() == (128, 128)
 
@@ -58,7 +59,7 @@ def test_twist_parity_sweep(chair):
         assert chair.pots() == twist_to_pot_bytes_int(v, w), (v, w)
     chair.advance(25)
     tel = chair.telemetry()[-1]
-    assert tel.flags & P.Flag.HOST_ACTIVE
+    assert tel.flags & StatusFlags.HOST_ACTIVE
     assert tel.last_cmd_seq == (chair.seq - 1) & 0xFF
 
 
@@ -71,7 +72,7 @@ def test_set_pots_clamped_and_capped(chair):
     chair.advance(25)
     assert chair.pots() == (168, 108)
     tel = chair.telemetry()[-1]
-    assert tel.flags & P.Flag.SPEED_CAPPED
+    assert tel.flags & StatusFlags.SPEED_CAPPED
     assert (tel.cap_fb, tel.cap_lr) == (40, 20)
 
 
@@ -92,7 +93,7 @@ def test_watchdog_neutral_after_250_ms(chair):
     # The frame takes ~0.5 ms on the wire, then up to a loop to be read.
     dt_ms = [(t - t_last) / 1000 for t, _, _ in log]
     assert all(250 <= d <= 250 + 1 + 2 * LOOP_MS for d in dt_ms), dt_ms
-    assert chair.telemetry()[-1].flags & P.Flag.WATCHDOG_TRIPPED
+    assert chair.telemetry()[-1].flags & StatusFlags.WATCHDOG_TRIPPED
     # A heartbeat does not restart the chair; a new command does.
     chair.send(P.Heartbeat)
     chair.advance(30)
@@ -100,7 +101,7 @@ def test_watchdog_neutral_after_250_ms(chair):
     chair.send(P.SetTwist, v_mm_s=500, w_mrad_s=0)
     chair.advance(30)
     assert chair.pots() == twist_to_pot_bytes_int(500, 0)
-    assert not chair.telemetry()[-1].flags & P.Flag.WATCHDOG_TRIPPED
+    assert not chair.telemetry()[-1].flags & StatusFlags.WATCHDOG_TRIPPED
 
 
 def test_joystick_wins_within_one_loop(chair):
@@ -121,7 +122,7 @@ def test_joystick_wins_within_one_loop(chair):
         chair.advance(20)
         assert chair.pots() == want
     tel = chair.telemetry()[-1]
-    assert tel.flags & P.Flag.JOYSTICK_OVERRIDE
+    assert tel.flags & StatusFlags.JOYSTICK_OVERRIDE
     assert (tel.joy_fb, tel.joy_lr) == (398, 200)
     # ... and not resumed on release: neutral until a new command.
     chair.cmd("J 254 254")
@@ -134,7 +135,7 @@ def test_joystick_wins_within_one_loop(chair):
     chair.cmd("J 3 254")
     chair.advance(25)
     assert chair.pots() == (128, 128)
-    assert chair.telemetry()[-1].flags & P.Flag.JOYSTICK_FAULT
+    assert chair.telemetry()[-1].flags & StatusFlags.JOYSTICK_FAULT
 
 
 def test_garbage_is_counted_and_harmless(chair):
@@ -187,14 +188,14 @@ def test_encoders_gyro_sonar(chair):
     assert tel.gyro_z_raw == -6550
     assert tel.gyro_z_rad_s == pytest.approx(-1.745, abs=1e-3)
     assert abs(tel.sonar_mm - 2000) <= 25
-    assert not tel.flags & P.Flag.IMU_FAULT
+    assert not tel.flags & StatusFlags.IMU_FAULT
     chair.cmd("I 0")  # unplug the IMU
     chair.advance(100)
     tel = chair.telemetry()[-1]
-    assert tel.flags & P.Flag.IMU_FAULT and tel.gyro_z_raw == 0
+    assert tel.flags & StatusFlags.IMU_FAULT and tel.gyro_z_raw == 0
     chair.cmd("I 1")
     chair.advance(1100)  # re-initialised within a second
-    assert not chair.telemetry()[-1].flags & P.Flag.IMU_FAULT
+    assert not chair.telemetry()[-1].flags & StatusFlags.IMU_FAULT
 
 
 def test_speed_and_realtime_modes(built):

@@ -98,3 +98,17 @@ def test_a_navigation_file_with_a_typo_or_a_gap_is_refused(tmp_path):
     path.write_text(text.replace("xy = 0.5", "# xy = 0.5"))
     with pytest.raises(ValueError, match=r"\[goal_tolerance\] is incomplete"):
         load_navigation_params(path)
+
+
+def test_internal_helpers_take_params_explicitly():
+    from abcwc.checks.ch00 import reference_distance_ahead
+    from abcwc.control.interface_board import joystick_state
+    from abcwc.types import make_frame
+
+    p = default_params()
+    with pytest.raises(TypeError, match="params"):
+        joystick_state(254, 254)  # type: ignore[call-arg]
+    assert joystick_state(254, 254, p) == "neutral" and joystick_state(300, 254, p) == "deflected"
+    with pytest.raises(TypeError, match="params"):
+        reference_distance_ahead(make_frame(sonar=1.0))  # type: ignore[call-arg]
+    assert reference_distance_ahead(make_frame(sonar=1.0), p) == pytest.approx(1.0 + 0.40)

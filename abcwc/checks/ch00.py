@@ -47,16 +47,15 @@ def reference_encoder_counts_to_distance(counts, counts_per_turn: float, d_wheel
     return counts / counts_per_turn * math.pi * d_wheel
 
 
-def reference_distance_ahead(frame: SensorFrame, params: ChairParams | None = None) -> float:
+def reference_distance_ahead(frame: SensorFrame, params: ChairParams) -> float:
     """Distance (m) from base_link to the nearest thing in the sonar's cone.
 
     The sonar sits ``params.sonar.mount[0]`` ahead of base_link; a reading at the
     sonar's maximum range means it saw nothing, so the answer is ``inf``.
     """
-    p = params or default_params()
-    if frame.sonar >= p.sonar.max_range:
+    if frame.sonar >= params.sonar.max_range:
         return math.inf
-    return frame.sonar + p.sonar.mount[0]
+    return frame.sonar + params.sonar.mount[0]
 
 
 # --- checks ---------------------------------------------------------------------------

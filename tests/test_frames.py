@@ -87,3 +87,14 @@ def test_a_frame_without_a_sonar_reading_reads_nan():
 def test_a_scan_reading_must_be_a_laser_scan():
     with pytest.raises(ValueError, match="lidar_link reading must be a LaserScan or None"):
         make_frame(lidar=np.ones(4))
+
+
+def test_simulated_sensors_carry_the_frame_ids_their_readings_are_keyed_by():
+    chair = SimBase(seed=1, lidar=True, depth_scan=True, people=False)
+    chair.run(lambda f: None, 0.1)
+    frame = chair.frame
+    assert chair.gyro.frame_id == "imu_link"
+    assert frame.readings[chair.sonar.frame_id] == frame.sonar
+    assert [frame.readings[k] for k in chair.ir.frame_ids] == list(frame.ir)
+    assert frame.readings[chair.lidar.frame_id] is frame.lidar
+    assert frame.readings[chair.depth_camera.frame_id] is frame.depth_scan

@@ -3,7 +3,11 @@
 Every dimension, rate and range of the Sterling Ruby that the library uses comes from
 here (thesis table 2, sections 2.2.5, 4.1.3-4.1.5, 4.2.1 and appendix A.18). Nothing
 else in ``abcwc`` hard-codes a chair number: pass a different :class:`ChairParams` to
-the simulator or controllers to model another chair.
+the simulator or controllers to model another chair. Each sensor's spec names the
+ROS frame id its readings carry (:attr:`ChairParams.sensors`).
+
+:func:`load_navigation_params` reads ``data/navigation.toml``: the sonar avoider's
+table 7 and the move_base, DWA planner and costmap settings of appendix A.17.
 """
 
 from __future__ import annotations
@@ -25,12 +29,13 @@ else:  # pragma: no cover
 
 @dataclass(frozen=True)
 class RangeSensorParams:
-    """A range sensor: rate (Hz), limits (m), noise (m, 1 sigma) and mounting."""
+    """A range sensor: frame id, rate (Hz), limits (m), noise (m, 1 sigma) and mounting."""
 
     rate_hz: float
     min_range: float
     max_range: float
     noise_std: float
+    frame_id: str  # ROS frame id of its readings, e.g. "sonar_link"
     mount: tuple[float, float, float] = (0.0, 0.0, 0.0)  # x, y (m), yaw (rad) in base_link
     beams: int = 1
     fov_deg: float = 0.0
@@ -49,7 +54,13 @@ class IrRingParams:
     ring_radius: float
     ring_centre: tuple[float, float]
     first_angle_deg: float
+    frame_ids: tuple[str, ...]  # ROS frame id of ranger k, facing first_angle + 60 k deg
     count: int = 6
+
+    def __post_init__(self) -> None:
+        if len(self.frame_ids) != self.count:
+            raise ValueError(f"the IR ring has {self.count} rangers but "
+                             f"{len(self.frame_ids)} frame ids: {self.frame_ids!r}")
 
 
 @dataclass(frozen=True)
@@ -60,6 +71,7 @@ class GyroParams:
     noise_std: float  # rad/s
     bias_std: float  # rad/s
     bias_walk_std: float  # rad/s/sqrt(s)
+    frame_id: str  # ROS frame id of the IMU, "imu_link"
 
 
 @dataclass(frozen=True)
@@ -124,6 +136,19 @@ class ChairParams:
         return [(rear, -half), (front, -half), (front, half), (rear, half)]
 
     @property
+    def sensors(self) -> dict[str, GyroParams | RangeSensorParams | IrRingParams]:
+        """Every sensor's spec keyed by the frame id its readings carry: ``imu_link``,
+        ``sonar_link``, ``ir_0_link``..``ir_5_link`` (all six the ring's one spec),
+        ``depth_scan_link``, ``lidar_link``. Derived from the named fields, so
+        ``dataclasses.replace(params, lidar=...)`` changes it too."""
+        specs: dict[str, GyroParams | RangeSensorParams | IrRingParams] = {
+            self.gyro.frame_id: self.gyro, self.sonar.frame_id: self.sonar}
+        specs.update({frame_id: self.ir for frame_id in self.ir.frame_ids})
+        specs.update({self.depth_scan.frame_id: self.depth_scan,
+                      self.lidar.frame_id: self.lidar})
+        return specs
+
+    @property
     def total_mass(self) -> float:
         """Chair plus occupant (kg)."""
         return self.mass_kg + self.occupant_mass_kg
@@ -166,3 +191,149 @@ def load_params(path: str | Path | None = None) -> ChairParams:
 def default_params() -> ChairParams:
     """The Sterling Ruby's parameters from ``data/chair.toml`` (cached)."""
     return load_params()
+
+
+# ------------------------------------------------------------------ navigation
+@dataclass(frozen=True)
+class SonarAvoidanceParams:
+    """Table 7 / eqn 3 (4.1.6): sonar distance (m) -> turn angle (deg)."""
+
+    turn_within: float  # m, no turn beyond this
+    reverse_within: float  # m, reverse closer than this
+    min_turn_deg: float  # at turn_within
+    max_turn_deg: float  # at reverse_within
+    turn_step_deg: float  # per step_distance closer
+    step_distance: float  # m
+
+
+@dataclass(frozen=True)
+class MoveBaseParams:
+    """move_base's own parameters (A.17 "Move_base params")."""
+
+    controller_frequency: float  # Hz
+    controller_patience: float  # s
+    planner_frequency: float  # Hz
+    planner_patience: float  # s
+    oscillation_timeout: float  # s
+    oscillation_distance: float  # m
+    shutdown_costmaps: bool
+    recovery_behavior_enabled: bool
+    clearing_rotation_allowed: bool
+    base_local_planner: str
+    base_global_planner: str
+
+
+@dataclass(frozen=True)
+class LocalPlannerParams:
+    """The DWA local planner's limits, scoring and sampling (A.17
+    Base_local_planner_params; ROS names, m, s, rad)."""
+
+    max_vel_x: float
+    min_vel_x: float
+    max_vel_y: float
+    min_vel_y: float
+    max_vel_theta: float
+    min_in_place_vel_theta: float
+    acc_lim_theta: float
+    acc_lim_x: float
+    acc_lim_y: float
+    holonomic_robot: bool
+    pdist_scale: float
+    gdist_scale: float
+    occdist_scale: float
+    meter_scoring: bool
+    heading_lookahead: float
+    heading_scoring: bool
+    heading_scoring_timestep: float
+    oscillation_reset_dist: float
+    publish_cost_grid_pc: bool
+    prune_plan: bool
+    sim_time: float
+    sim_granularity: float
+    angular_sim_granularity: float
+    vx_samples: int
+    vy_samples: int
+    vtheta_samples: int
+    dwa: bool
+    simple_attractor: bool
+
+
+@dataclass(frozen=True)
+class GoalTolerance:
+    """When a goal counts as reached (A.17): within ``xy`` m and ``yaw`` rad."""
+
+    xy: float
+    yaw: float
+    latch_xy: bool
+
+
+@dataclass(frozen=True)
+class CostmapParams:
+    """What both costmaps share (A.17 Costmap_common_params), m."""
+
+    obstacle_range: float
+    raytrace_range: float
+    robot_radius: float
+    inflation_radius: float
+    min_obstacle_height: float
+
+
+@dataclass(frozen=True)
+class CostmapWindowParams:
+    """One costmap's frame, rates (Hz), grid (m) and window (A.17 global/local costmap)."""
+
+    global_frame: str
+    robot_base_frame: str
+    update_frequency: float
+    publish_frequency: float
+    resolution: float
+    width: float
+    height: float
+    static_map: bool
+    rolling_window: bool
+    transform_tolerance: float
+    sonar_no_readings_timeout: float | None = None  # s, local costmap's sonar layer
+
+
+@dataclass(frozen=True)
+class NavigationParams:
+    """The navigation numbers of ``data/navigation.toml`` (thesis table 7 and A.17)."""
+
+    sonar_avoidance: SonarAvoidanceParams
+    move_base: MoveBaseParams
+    local_planner: LocalPlannerParams
+    goal_tolerance: GoalTolerance
+    costmap: CostmapParams
+    global_costmap: CostmapWindowParams
+    local_costmap: CostmapWindowParams
+
+
+def _table(cls: type, raw: dict[str, Any], name: str, path: Path) -> Any:
+    """Build ``cls`` from TOML table ``name``: every key known, every required key there."""
+    if name not in raw:
+        raise ValueError(f"{path}: no [{name}] table")
+    table = raw[name]
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(set(table) - known)
+    if unknown:
+        raise ValueError(f"{path}: [{name}] has unknown keys {unknown}; allowed: {sorted(known)}")
+    try:
+        return cls(**table)
+    except TypeError as error:
+        raise ValueError(f"{path}: [{name}] is incomplete: {error}") from None
+
+
+def load_navigation_params(path: str | Path | None = None) -> NavigationParams:
+    """Read navigation parameters from a TOML file (default ``data/navigation.toml``)."""
+    path = Path(path) if path is not None else data_dir() / "navigation.toml"
+    with open(path, "rb") as handle:
+        raw = tomllib.load(handle)
+    classes = {"sonar_avoidance": SonarAvoidanceParams, "move_base": MoveBaseParams,
+               "local_planner": LocalPlannerParams, "goal_tolerance": GoalTolerance,
+               "costmap": CostmapParams, "global_costmap": CostmapWindowParams,
+               "local_costmap": CostmapWindowParams}
+    unknown = sorted(set(raw) - set(classes))
+    if unknown:
+        raise ValueError(f"{path}: unknown tables {unknown}; allowed: {sorted(classes)}")
+    return NavigationParams(**{name: _table(cls, raw, name, path)
+                               for name, cls in classes.items()})

@@ -12,6 +12,8 @@ from enum import IntFlag
 
 import numpy as np
 
+from abcwc.params import ChairParams, default_params
+
 
 def require_finite(name: str, value: float) -> float:
     """Return ``value`` as float, or raise ValueError if it is not a finite number."""
@@ -106,20 +108,42 @@ class LaserScan:
         return self.angle_min + self.angle_increment * np.arange(len(self.ranges))
 
 
-@dataclass
+SONAR_FRAME = "sonar_link"
+"""Frame id of the MaxSonar MB1013 under the tray: one range (m) per reading."""
+IR_FRAMES = tuple(f"ir_{k}_link" for k in range(6))
+"""Frame ids of the six Sharp IR rangers, ``ir_k_link`` facing ``first_angle + 60 k`` deg."""
+DEPTH_SCAN_FRAME = "depth_scan_link"
+"""Frame id of the Kinect's fake laser scan (depthimage_to_laserscan): a LaserScan."""
+LIDAR_FRAME = "lidar_link"
+"""Frame id of the 360-degree 2D lidar: a LaserScan."""
+
+_UNSET = object()  # "not given" for SensorFrame's keyword arguments (None means "no scan")
+
+
+def ir_frame(k: int) -> str:
+    """Frame id of IR ranger ``k`` (0-based): ``ir_<k>_link``."""
+    return f"ir_{k}_link"
+
+
+@dataclass(init=False)
 class SensorFrame:
     """Everything the chair reports in one control period.
 
     The first block is what the real chair's firmware sends; the simulator fills the
     ``sim extras`` too (ground truth and the heavier sensors).
+
+    ``readings`` holds every range sensor's newest reading keyed by its ROS frame id
+    (as a ``header.frame_id``): :data:`SONAR_FRAME` and the six :data:`IR_FRAMES` map to
+    a range (float, m; REP 117: ``inf`` nothing in range, ``-inf`` too close, NaN no
+    reading), :data:`DEPTH_SCAN_FRAME` and :data:`LIDAR_FRAME` to a :class:`LaserScan`
+    (absent when the sensor is off). ``sonar``, ``ir``, ``lidar`` and ``depth_scan`` read
+    (and set) the same entries, and the constructor takes them by those names too.
     """
 
     t: float  # s since start
     ticks_left: int  # cumulative encoder counts (x1 decoding, + = wheel forward)
     ticks_right: int
     gyro_z: float  # rad/s, counter-clockwise positive
-    sonar: float  # m, latest MB1013 reading (clipped to 0.30..5.0)
-    ir: np.ndarray  # (6,) m; inf = nothing in 0.2..1.5 m, -inf = closer than 0.2 m
     joystick_fb: int  # joystick ADC (pot scale: centre 254, 110..398)
     joystick_lr: int
     pot_fb: int  # bytes on the digital pot now
@@ -128,7 +152,111 @@ class SensorFrame:
     bad_frames: int = 0
     # sim extras
     pose: Pose2D | None = None  # ground truth (map frame)
-    lidar: LaserScan | None = None  # newest scan, when the sensor is enabled
-    depth_scan: LaserScan | None = None
     collisions: int = 0  # collisions so far
     extras: dict = field(default_factory=dict)
+    readings: dict[str, object] = field(default_factory=dict)  # frame id -> range / scan
+
+    def __init__(
+        self,
+        t: float,
+        ticks_left: int,
+        ticks_right: int,
+        gyro_z: float,
+        *,
+        joystick_fb: int,
+        joystick_lr: int,
+        pot_fb: int,
+        pot_lr: int,
+        sonar: object = _UNSET,
+        ir: object = _UNSET,
+        flags: StatusFlags = StatusFlags.NONE,
+        bad_frames: int = 0,
+        pose: Pose2D | None = None,
+        lidar: object = _UNSET,
+        depth_scan: object = _UNSET,
+        collisions: int = 0,
+        extras: dict | None = None,
+        readings: dict[str, object] | None = None,
+    ):
+        self.t, self.ticks_left, self.ticks_right, self.gyro_z = t, ticks_left, ticks_right, gyro_z
+        self.joystick_fb, self.joystick_lr = joystick_fb, joystick_lr
+        self.pot_fb, self.pot_lr = pot_fb, pot_lr
+        self.flags, self.bad_frames, self.pose = flags, bad_frames, pose
+        self.collisions = collisions
+        self.extras = {} if extras is None else extras
+        self.readings = dict(readings or {})  # a copy: replace() must not edit the original
+        for name, value in (("sonar", sonar), ("ir", ir), ("lidar", lidar),
+                            ("depth_scan", depth_scan)):
+            if value is not _UNSET:
+                setattr(self, name, value)
+
+    @property
+    def sonar(self) -> float:
+        """The sonar's range (m; clipped to 0.30..5.0, NaN when there is none)."""
+        return self.readings.get(SONAR_FRAME, math.nan)  # type: ignore[return-value]
+
+    @sonar.setter
+    def sonar(self, value: float) -> None:
+        self.readings[SONAR_FRAME] = value
+
+    @property
+    def ir(self) -> np.ndarray:
+        """The IR ring's ranges (m), one per ``ir_k_link`` from k = 0 (a new array:
+        ``inf`` nothing in 0.2..1.5 m, ``-inf`` closer than 0.2 m)."""
+        values = []
+        while ir_frame(len(values)) in self.readings:
+            values.append(self.readings[ir_frame(len(values))])
+        return np.array(values, dtype=float)
+
+    @ir.setter
+    def ir(self, values: np.ndarray) -> None:
+        k = 0
+        while ir_frame(k) in self.readings:
+            del self.readings[ir_frame(k)]
+            k += 1
+        for k, value in enumerate(np.asarray(values, dtype=float)):
+            self.readings[ir_frame(k)] = float(value)
+
+    @property
+    def lidar(self) -> LaserScan | None:
+        """The newest lidar scan, or None when the lidar is off."""
+        return self.readings.get(LIDAR_FRAME)  # type: ignore[return-value]
+
+    @lidar.setter
+    def lidar(self, scan: LaserScan | None) -> None:
+        self._set_scan(LIDAR_FRAME, scan)
+
+    @property
+    def depth_scan(self) -> LaserScan | None:
+        """The newest depth-camera scan, or None when the camera is off."""
+        return self.readings.get(DEPTH_SCAN_FRAME)  # type: ignore[return-value]
+
+    @depth_scan.setter
+    def depth_scan(self, scan: LaserScan | None) -> None:
+        self._set_scan(DEPTH_SCAN_FRAME, scan)
+
+    def _set_scan(self, frame_id: str, scan: LaserScan | None) -> None:
+        if scan is None:
+            self.readings.pop(frame_id, None)
+        elif isinstance(scan, LaserScan):
+            self.readings[frame_id] = scan
+        else:
+            raise ValueError(f"{frame_id} reading must be a LaserScan or None, got {scan!r}")
+
+
+def make_frame(t: float = 0.0, params: ChairParams | None = None, **fields: object) -> SensorFrame:
+    """A SensorFrame of a chair at rest in open space, for tests and checks.
+
+    Defaults (from ``params``, the Sterling Ruby's by default): no encoder counts, no
+    turn, the sonar at its maximum range (nothing ahead), every IR ranger ``inf``,
+    joystick centred, pots neutral, no ground truth. ``fields`` override any of them
+    by SensorFrame's keyword names (``sonar=1.2``, ``pose=Pose2D(...)``, ``lidar=scan``).
+    """
+    p = params if params is not None else default_params()
+    values: dict[str, object] = dict(
+        ticks_left=0, ticks_right=0, gyro_z=0.0, sonar=p.sonar.max_range,
+        ir=np.full(p.ir.count, np.inf), joystick_fb=p.joystick_centre,
+        joystick_lr=p.joystick_centre, pot_fb=p.pot_neutral, pot_lr=p.pot_neutral,
+    )
+    values.update(fields)
+    return SensorFrame(t, **values)  # type: ignore[arg-type]

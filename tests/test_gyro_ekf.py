@@ -34,7 +34,7 @@ from abcwc.estimation.consistency import (
 from abcwc.estimation.ekf import BIAS, H_GYRO, motion, motion_jacobian
 from abcwc.sim.base import SimBase
 from abcwc.sim.world import box_world
-from abcwc.types import Pose2D, SensorFrame, Twist
+from abcwc.types import Pose2D, Twist, make_frame
 
 OPEN = box_world(20, 20, centred=True)
 
@@ -210,9 +210,7 @@ def test_waypoint_route_refuses_bad_input():
         FollowWaypoints([(1.0, math.nan)])
     with pytest.raises(ValueError, match="laps"):
         floor_mixed_drive(0)
-    frame = SensorFrame(t=0.0, ticks_left=0, ticks_right=0, gyro_z=0.0, sonar=5.0,
-                        ir=np.full(6, np.inf), joystick_fb=254, joystick_lr=254, pot_fb=128,
-                        pot_lr=128, pose=None)
+    frame = make_frame(pose=None)
     with pytest.raises(ValueError, match="ground-truth"):
         GroundTruth().update_frame(frame)
 

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import dataclasses
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from abcwc.log import RunLog
+from abcwc.log import CHANNELS, FORMAT_VERSION, LogRecorder, RunLog
 from abcwc.sim import SimBase
-from abcwc.types import PotCommand, Twist
+from abcwc.types import LaserScan, PotCommand, Twist, make_frame
 
 
 def test_log_records_commands_and_frames(tmp_path):
@@ -39,3 +42,94 @@ def test_loading_a_log_of_another_format_is_refused(tmp_path):
     np.savez(path, meta=np.array('{"format_version": 99}'), t=log.t)
     with pytest.raises(ValueError, match="format 99"):
         RunLog.load(path)
+
+
+V1_FIXTURE = Path(__file__).parent / "data" / "runlog_v1_lab_seed4.npz"
+
+
+def _fixture_drive() -> RunLog:
+    """The drive the v1 fixture recorded (1 s, lab, seed 4), recorded again now."""
+    chair = SimBase(seed=4, lidar=True, depth_scan=True)
+    return chair.drive(Twist(0.5, 0.3), 1.0)
+
+
+def test_a_version_1_file_still_loads_as_the_same_drive():
+    with np.load(V1_FIXTURE) as raw:  # the fixture really is the old fixed-field format
+        assert "ticks" in raw.files and "format_version" not in raw.files
+    old = RunLog.load(V1_FIXTURE)
+    now = _fixture_drive()
+    assert old.meta["format_version"] == 1 and len(old) == len(now) == 50
+    assert sorted(old.channels) == sorted(CHANNELS) == sorted(now.channels)
+    for name in CHANNELS:
+        np.testing.assert_array_equal(getattr(old, name), getattr(now, name))
+        assert getattr(old, name).dtype == getattr(now, name).dtype, name
+    assert set(old.scans) == {"lidar_link", "depth_scan_link"}
+    np.testing.assert_array_equal(old.lidar.ranges, now.lidar.ranges)
+    np.testing.assert_array_equal(old.depth_scan.stamps, now.depth_scan.stamps)
+    assert old.depth_scan.range_max == 4.0  # the Kinect's 4 m (chair.toml)
+
+
+def test_save_writes_version_2_with_named_channels(tmp_path):
+    log = _fixture_drive()
+    path = log.save(tmp_path / "drive.npz")
+    with np.load(path) as raw:
+        assert int(raw["format_version"]) == 2 == FORMAT_VERSION
+        assert "channels/ticks" in raw.files and "scans/lidar_link/ranges" in raw.files
+        assert "ticks" not in raw.files
+    again = RunLog.load(path)
+    assert again.meta["format_version"] == 2 and again.meta["seed"] == 4
+    for name, values in log.channels.items():
+        np.testing.assert_array_equal(again.channels[name], values)
+    np.testing.assert_array_equal(again.depth_scan.ranges, log.depth_scan.ranges)
+
+
+def test_channels_read_as_attributes_and_replace_swaps_one():
+    log = _fixture_drive()
+    assert log.ticks is log.channels["ticks"] and log.pose.shape == (50, 3)
+    assert "gyro_z" in dir(log)
+    with pytest.raises(AttributeError, match="no channel or attribute 'speed'"):
+        _ = log.speed
+    blind = dataclasses.replace(log, pose=np.full_like(log.pose, np.nan))
+    assert np.isnan(blind.pose).all() and np.isfinite(log.pose).all()
+    assert blind.ticks is log.ticks and blind.meta is log.meta and blind.lidar is log.lidar
+
+
+def test_every_channel_needs_one_row_per_stamp():
+    with pytest.raises(ValueError, match="'ticks' has \\(3, 2\\) values; .* \\(4\\)"):
+        RunLog(t=np.arange(4.0), ticks=np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="time channel 't'"):
+        RunLog(ticks=np.zeros((3, 2)))
+
+
+def test_select_keeps_the_rows_asked_for_in_every_channel():
+    log = _fixture_drive()
+    late = log.t >= 0.5
+    part = log.select(late)
+    assert len(part) == 26 and part.t[0] == pytest.approx(0.5)
+    for name, values in log.channels.items():
+        np.testing.assert_array_equal(part.channels[name], values[late])
+
+
+def test_readings_other_than_sonar_and_ir_are_recorded_by_frame_id():
+    recorder = LogRecorder({"source": "test"})
+    scan = LaserScan(-1.0, 1.0, 0.1, 5.0, np.array([1.0, 2.0, 3.0]), stamp=0.02)
+    for k in range(3):
+        readings = {"rear_sonar_link": 1.5 + k} if k != 1 else {}
+        frame = make_frame(t=0.02 * (k + 1), readings=readings, sonar=2.0)
+        frame.readings["rear_scan_link"] = scan  # the same scan every period: kept once
+        recorder.add(frame, None, None)
+    log = recorder.build()
+    np.testing.assert_array_equal(log.rear_sonar_link, [1.5, np.nan, 3.5])
+    assert log.scans["rear_scan_link"].ranges.shape == (1, 3)
+    np.testing.assert_array_equal(log.sonar, [2.0, 2.0, 2.0])
+    assert "sonar_link" not in log.channels and "ir_0_link" not in log.channels
+    assert log.ir.shape == (3, 6)
+
+
+def test_summary_of_an_empty_log_and_of_a_log_without_ground_truth():
+    assert LogRecorder().build().summary() == "empty log: 0 rows"
+    log = _fixture_drive()
+    assert log.summary() == "1.0 s, 0.36 m driven, 0 collisions"
+    blind = dataclasses.replace(log, pose=np.full_like(log.pose, np.nan))
+    assert blind.summary() == "1.0 s, distance driven: unknown (no ground truth), 0 collisions"
+    assert "nan" not in blind.summary()

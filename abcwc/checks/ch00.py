@@ -22,7 +22,7 @@ import numpy as np
 
 from abcwc.checks.report import checker, expect, expect_close, format_value
 from abcwc.params import ChairParams, default_params
-from abcwc.types import Pose2D, SensorFrame
+from abcwc.types import Pose2D, SensorFrame, make_frame
 
 __all__ = [
     "counts_per_wheel_turn",
@@ -47,16 +47,15 @@ def reference_encoder_counts_to_distance(counts, counts_per_turn: float, d_wheel
     return counts / counts_per_turn * math.pi * d_wheel
 
 
-def reference_distance_ahead(frame: SensorFrame, params: ChairParams | None = None) -> float:
+def reference_distance_ahead(frame: SensorFrame, params: ChairParams) -> float:
     """Distance (m) from base_link to the nearest thing in the sonar's cone.
 
     The sonar sits ``params.sonar.mount[0]`` ahead of base_link; a reading at the
     sonar's maximum range means it saw nothing, so the answer is ``inf``.
     """
-    p = params or default_params()
-    if frame.sonar >= p.sonar.max_range:
+    if frame.sonar >= params.sonar.max_range:
         return math.inf
-    return frame.sonar + p.sonar.mount[0]
+    return frame.sonar + params.sonar.mount[0]
 
 
 # --- checks ---------------------------------------------------------------------------
@@ -116,9 +115,7 @@ def encoder_counts_to_distance(fn: Callable[..., object]) -> str:
 
 def _frame(sonar: float, pose: Pose2D | None = None) -> SensorFrame:
     """A SensorFrame with a given sonar reading and everything else at rest."""
-    return SensorFrame(t=0.0, ticks_left=0, ticks_right=0, gyro_z=0.0, sonar=sonar,
-                       ir=np.full(6, np.inf), joystick_fb=254, joystick_lr=254, pot_fb=128,
-                       pot_lr=128, pose=pose)
+    return make_frame(sonar=sonar, pose=pose)
 
 
 @checker("distance ahead")

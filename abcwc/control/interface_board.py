@@ -32,15 +32,15 @@ JOYSTICK_PLAUSIBLE_MIN = 60
 JOYSTICK_PLAUSIBLE_MAX = 450
 
 
-def joystick_state(fb_adc: int, lr_adc: int, params: ChairParams | None = None) -> str:
+def joystick_state(fb_adc: int, lr_adc: int, params: ChairParams) -> str:
     """``"fault"`` if a reading is outside 60..450 (no working joystick reads that),
     else ``"deflected"`` if a channel is outside the dead band 248..260, else
     ``"neutral"``. Unlike A.18's checkjoystick, either axis alone counts."""
-    p = params or default_params()
     readings = (fb_adc, lr_adc)
     if any(not JOYSTICK_PLAUSIBLE_MIN <= r <= JOYSTICK_PLAUSIBLE_MAX for r in readings):
         return "fault"
-    if any(not p.joystick_dead_band_low <= r <= p.joystick_dead_band_high for r in readings):
+    low, high = params.joystick_dead_band_low, params.joystick_dead_band_high
+    if any(not low <= r <= high for r in readings):
         return "deflected"
     return "neutral"
 

@@ -106,7 +106,7 @@ def gyro_odometry_from_log(
     validate_log(log, need_gyro=True)
     start = _check_pose("start", _log_start(log, start))
     theta = np.unwrap(integrate_gyro_heading(log.t, log.gyro_z, start.theta, bias))
-    travel = log_wheel_travel(log, params or default_params(), correction, bits)
+    travel = log_wheel_travel(log, params, correction, bits)  # None: the nominal chair
     dx, dy = _chord(travel.sum(axis=1) / 2.0, np.diff(theta), theta[:-1], method)
     out = np.empty((len(theta), 3))
     out[:, 0] = start.x + np.concatenate([[0.0], np.cumsum(dx)])

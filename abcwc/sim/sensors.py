@@ -73,6 +73,7 @@ class Gyro:
 
     def __init__(self, params: GyroParams, period: float, rng: np.random.Generator):
         self._noise = GaussianStream(rng, 2)
+        self.frame_id = params.frame_id  # where its samples are taken ("imu_link")
         self.bias = float(rng.normal(0.0, params.bias_std))
         self._noise_std = params.noise_std
         self._walk_std = params.bias_walk_std * math.sqrt(period)
@@ -93,6 +94,7 @@ class Sonar:
 
     def __init__(self, params: RangeSensorParams, rng: np.random.Generator):
         self.params = params
+        self.frame_id = params.frame_id  # the SensorFrame.readings key of its range
         self._noise = GaussianStream(rng)
         self._half = math.radians(params.half_angle_deg)
 
@@ -115,6 +117,7 @@ class IrRing:
 
     def __init__(self, params: IrRingParams, rng: np.random.Generator):
         self.params = params
+        self.frame_ids = params.frame_ids  # the SensorFrame.readings key of each ranger
         self._noise = GaussianStream(rng, params.count)
         angles = np.radians(params.first_angle_deg + 60.0 * np.arange(params.count))
         cx, cy = params.ring_centre
@@ -151,6 +154,7 @@ class ScanSensor:
     def __init__(self, params: RangeSensorParams, rng: np.random.Generator,
                  depth_noise: bool = False):
         self.params = params
+        self.frame_id = params.frame_id  # the SensorFrame.readings key of its scans
         self._rng = rng
         self.depth_noise = depth_noise
         if params.fov_deg == 0:

@@ -67,15 +67,15 @@ def plot_scan(scan: LaserScan, pose: PoseLike, mount: Mount, ax: Axes | None = N
     return ax
 
 
-def _frame_and_params(frame_or_chair: object, params: ChairParams | None,
-                      ) -> tuple[SensorFrame, ChairParams]:
+def _frame_of(frame_or_chair: object) -> SensorFrame:
+    """The frame itself, or a chair's latest ``.frame``."""
     if isinstance(frame_or_chair, SensorFrame):
-        return frame_or_chair, params or default_params()
+        return frame_or_chair
     frame = getattr(frame_or_chair, "frame", None)
     if not isinstance(frame, SensorFrame):
         raise ValueError("plot_sensors needs a SensorFrame or a chair with a .frame, "
                          f"got {type(frame_or_chair).__name__}")
-    return frame, params or getattr(frame_or_chair, "params", None) or default_params()
+    return frame
 
 
 def plot_sensors(frame_or_chair: object, ax: Axes | None = None,
@@ -90,7 +90,8 @@ def plot_sensors(frame_or_chair: object, ax: Axes | None = None,
     moving chair they may sit a few centimetres off the walls; :func:`plot_run` and
     the animations draw logged scans from the pose they were taken at.
     """
-    frame, p = _frame_and_params(frame_or_chair, params)
+    frame = _frame_of(frame_or_chair)
+    p = params or getattr(frame_or_chair, "params", None) or default_params()
     pose = pose if pose is not None else frame.pose
     if pose is None:
         raise ValueError("the frame has no ground-truth pose (a real chair); pass pose=")

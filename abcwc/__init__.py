@@ -8,8 +8,16 @@ course cell's speed-capped real chair (``ABCWC_PORT``), or ``None`` when there i
 from abcwc.base import Base
 from abcwc.connect import HARDWARE_CELL_CAP, PORT_ENV, SIMAVR_PORT, connect, hardware_chair
 from abcwc.log import RunLog
-from abcwc.params import ChairParams, default_params
-from abcwc.types import LaserScan, Pose2D, PotCommand, SensorFrame, StatusFlags, Twist
+from abcwc.params import ChairParams, NavigationParams, default_params, load_navigation_params
+from abcwc.types import (
+    LaserScan,
+    Pose2D,
+    PotCommand,
+    SensorFrame,
+    StatusFlags,
+    Twist,
+    make_frame,
+)
 
 __version__ = "0.1.0"
 
@@ -19,6 +27,7 @@ __all__ = [
     "SIMAVR_PORT",
     "Base",
     "ChairParams",
+    "NavigationParams",
     "LaserScan",
     "Pose2D",
     "PotCommand",
@@ -29,4 +38,6 @@ __all__ = [
     "connect",
     "hardware_chair",
     "default_params",
+    "load_navigation_params",
+    "make_frame",
 ]

@@ -65,7 +65,7 @@ def bench_ekf() -> dict[str, float]:
 def bench_nees() -> dict[str, float]:
     import os
 
-    from abcwc.estimation.consistency import ekf_monte_carlo
+    from abcwc.experiments.nees import ekf_monte_carlo
 
     result = ekf_monte_carlo(50, 300.0, processes=min(os.cpu_count() or 1, 4))
     ekf = [run.ekf_final_error for run in result.runs]

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from abcwc.behaviours import GoToLandmark, ThesisGoToLandmark, distance_and_bearing
+from abcwc.behaviours import GoToLandmark, Status, ThesisGoToLandmark, distance_and_bearing
 from abcwc.behaviours.landmark import proportional_command, turn_then_drive
 from abcwc.estimation import Odometry
 from abcwc.sim.base import SimBase
@@ -35,7 +35,7 @@ def _drive(controller_class, **options):
 def test_thesis_and_proportional_controllers_reach_the_goal():
     thesis, error_t, length_t, time_t = _drive(ThesisGoToLandmark)
     better, error_p, length_p, time_p = _drive(GoToLandmark)
-    assert thesis.reached and better.reached
+    assert thesis.status is better.status is Status.SUCCEEDED
     assert error_t <= 0.5  # the thesis's tolerance (A.10)
     assert error_p <= 0.1  # a 0.1 m tolerance, stopping included
     assert time_p < time_t  # turns while driving instead of stopping to turn
@@ -88,7 +88,7 @@ def test_a_goal_just_left_of_west_is_a_small_left_turn():
     assert first_turn > 0  # left, towards the goal
     heading = np.unwrap(log.pose[:, 2])
     assert np.ptp(heading) < 0.6  # no long way round
-    assert controller.reached and controller.state == "reached"
+    assert controller.status is Status.SUCCEEDED and controller.state == "reached"
 
 
 def test_hysteresis_sets_off_better_aimed():
@@ -99,7 +99,7 @@ def test_hysteresis_sets_off_better_aimed():
         states = []
         sim.run(lambda frame: states.append(controller.state) or controller(frame), 30.0)
         states.append(controller.state)
-        assert controller.reached
+        assert controller.status is Status.SUCCEEDED
         return sum(a != "turn" and b == "turn" for a, b in zip(states, states[1:]))
 
     assert turn_phases(align_tolerance=0.1) < turn_phases()

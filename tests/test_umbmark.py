@@ -6,18 +6,15 @@ import math
 import numpy as np
 import pytest
 
+from abcwc.behaviours import SquareDriver
 from abcwc.estimation.odometry import Odometry
 from abcwc.estimation.umbmark import (
-    SquareDriver,
     alpha_beta,
     centres_of_gravity,
     curve_radius,
-    drive_square,
     e_max_syst,
     load_thesis_trials,
     model_return_error,
-    run_square,
-    run_umbmark,
     thesis_a16_outputs,
     trial_covariance,
     umbmark_corrections,
@@ -25,6 +22,7 @@ from abcwc.estimation.umbmark import (
     wheel_correction_factors,
     wheel_diameter_ratio,
 )
+from abcwc.experiments.umbmark_trials import drive_square, run_square, run_umbmark
 from abcwc.sim.base import SimBase
 from abcwc.sim.motor import ChairErrors
 from abcwc.sim.world import box_world

@@ -6,10 +6,11 @@ Distance and heading to the goal (thesis 4.2.2, eqns 11-12; eqn 11 as printed ha
     rho = sqrt((x_d - x_0)^2 + (y_d - y_0)^2)           (eqn 11)
     alpha = atan2(y_d - y_0, x_d - x_0) - theta_0       (eqn 12, wrapped to (-pi, pi])
 
-Two controllers, both callables for ``SimBase.run``. Each takes a pose estimator, any
-object with ``update_frame(frame) -> Pose2D`` (:class:`abcwc.estimation.Odometry`,
-:class:`abcwc.estimation.GyroOdometry`, ...), feeds it every frame, and stops for good
-("reached") once the estimate is within ``tolerance`` of the goal.
+Two behaviours (:class:`~abcwc.behaviours.base.BehaviourBase`), each a controller for
+``Base.run``. Each takes a pose estimator, any object with ``update_frame(frame) ->
+Pose2D`` (:class:`abcwc.estimation.Odometry`, :class:`abcwc.estimation.GyroOdometry`,
+...), feeds it every frame, and succeeds (stops for good) once the estimate is within
+``tolerance`` of the goal.
 
 * :class:`ThesisGoToLandmark`: appendix A.10's turn-then-drive, as a state machine
   (:func:`turn_then_drive`): turn on the spot at a fixed rate while the heading is off,
@@ -41,16 +42,16 @@ object with ``update_frame(frame) -> Pose2D`` (:class:`abcwc.estimation.Odometry
   while facing away), each clipped to its limit; the speed also stays below
   ``sqrt(2 a rho)`` so it can brake in the distance left (:func:`proportional_command`).
   For small alpha, ``d(alpha)/dt ~ -(k_alpha - k_rho) alpha``, so the heading settles
-  when ``k_alpha > k_rho`` (the book's condition). "Reached" is latched, so the chair
+  when ``k_alpha > k_rho`` (the book's condition). Success is latched, so the chair
   never hunts around the goal.
 """
 
 from __future__ import annotations
 
 import math
-from numbers import Real
 from typing import Protocol
 
+from abcwc.behaviours.base import LOOP_RATE_HZ, BehaviourBase, finite_point, positive_number
 from abcwc.geometry import wrap_angle
 from abcwc.types import Pose2D, SensorFrame, Twist
 
@@ -65,13 +66,6 @@ class PoseEstimator(Protocol):
     """Anything that turns each SensorFrame into a pose estimate."""
 
     def update_frame(self, frame: SensorFrame) -> Pose2D: ...
-
-
-def _positive(name: str, value: float, unit: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, Real) or not (
-            math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be a finite number > 0 {unit}, got {value!r}")
-    return float(value)
 
 
 def distance_and_bearing(pose: Pose2D, goal: tuple[float, float]) -> tuple[float, float]:
@@ -127,57 +121,77 @@ def proportional_command(rho: float, alpha: float, *, k_rho: float = 0.8,
     return Twist(v * max(0.0, math.cos(alpha)), w)
 
 
-class _GoalController:
-    def __init__(self, goal: tuple[float, float], estimator: PoseEstimator, tolerance: float):
-        if not (len(goal) == 2 and all(math.isfinite(float(g)) for g in goal)):
-            raise ValueError(f"goal must be a finite (x, y) in metres, got {goal!r}")
-        self.goal = (float(goal[0]), float(goal[1]))
+class GoalBehaviour(BehaviourBase):
+    """Drive to a goal point by a pose estimate; succeed within ``tolerance`` (m).
+
+    Every frame feeds the estimator (:meth:`observe`) and refreshes :attr:`pose`,
+    :attr:`rho` (m) and :attr:`alpha` (rad); at ``rate_hz`` :meth:`update` succeeds
+    once ``rho <= tolerance`` or asks :meth:`command` for this period's Twist.
+    """
+
+    def __init__(self, goal: tuple[float, float], estimator: PoseEstimator, tolerance: float,
+                 rate_hz: float):
+        super().__init__(rate_hz)
+        self.goal = finite_point(goal, "goal")
         self.estimator = estimator
-        self.tolerance = _positive("tolerance", tolerance, "m")
-        self.reached = False
+        self.tolerance = positive_number("tolerance", tolerance, "m")
         self.pose = Pose2D()
         self.rho, self.alpha = math.inf, 0.0  # the latest distance (m) and bearing (rad)
 
-    def __call__(self, frame: SensorFrame) -> Twist:
+    def set_goal(self, goal: tuple[float, float]) -> None:
+        """Aim at a new goal from the latest pose (the estimator keeps its state)."""
+        self.goal = finite_point(goal, "goal")
+        self.rho, self.alpha = distance_and_bearing(self.pose, self.goal)
+
+    def observe(self, frame: SensorFrame) -> None:
         self.pose = self.estimator.update_frame(frame)
         self.rho, self.alpha = distance_and_bearing(self.pose, self.goal)
-        if self.reached or self.rho <= self.tolerance:
-            self.reached = True
+
+    def update(self, frame: SensorFrame) -> Twist:
+        if self.rho <= self.tolerance:
+            self.succeed()
             return Twist(0.0, 0.0)
         return self.command(self.rho, self.alpha)
 
     def command(self, rho: float, alpha: float) -> Twist:
-        raise NotImplementedError
+        """This period's Twist for distance ``rho`` (m) and bearing ``alpha`` (rad)."""
+        raise NotImplementedError(f"{type(self).__name__} must define command(rho, alpha)")
 
 
-class ThesisGoToLandmark(_GoalController):
+class ThesisGoToLandmark(GoalBehaviour):
     """Turn-then-drive (A.10, fixed): :func:`turn_then_drive` every period.
 
     ``tolerance`` (m), ``heading_tolerance`` and ``align_tolerance`` (rad), ``speed``
     (m/s) and ``turn_rate`` (rad/s) as there; the defaults are A.10's (0.5 m, 0.3 rad,
     no hysteresis). :attr:`state` is the machine's state after the latest period.
+    ``rate_hz`` (Hz) how often it decides (A.10 ran at 2 Hz; default every period).
     """
 
     def __init__(self, goal: tuple[float, float], estimator: PoseEstimator,
                  tolerance: float = 0.5, heading_tolerance: float = 0.3,
                  speed: float = 0.5, turn_rate: float = 0.5,
-                 align_tolerance: float | None = None):
-        super().__init__(goal, estimator, tolerance)
-        self.heading_tolerance = _positive("heading_tolerance", heading_tolerance, "rad")
+                 align_tolerance: float | None = None, rate_hz: float = LOOP_RATE_HZ):
+        super().__init__(goal, estimator, tolerance, rate_hz)
+        self.heading_tolerance = positive_number("heading_tolerance", heading_tolerance, "rad")
         align = heading_tolerance if align_tolerance is None else align_tolerance
-        self.align_tolerance = _positive("align_tolerance", align, "rad")
+        self.align_tolerance = positive_number("align_tolerance", align, "rad")
         if self.align_tolerance > self.heading_tolerance:
             raise ValueError(f"align_tolerance {align!r} rad must not exceed "
                              f"heading_tolerance {heading_tolerance!r} rad")
-        self.speed = _positive("speed", speed, "m/s")
-        self.turn_rate = _positive("turn_rate", turn_rate, "rad/s")
+        self.speed = positive_number("speed", speed, "m/s")
+        self.turn_rate = positive_number("turn_rate", turn_rate, "rad/s")
         self.state = TURN
 
-    def __call__(self, frame: SensorFrame) -> Twist:
-        command = super().__call__(frame)
-        if self.reached:
+    def update(self, frame: SensorFrame) -> Twist:
+        command = super().update(frame)
+        if self.rho <= self.tolerance:
             self.state = REACHED
         return command
+
+    def reset(self) -> None:
+        """Start over from :data:`TURN`."""
+        super().reset()
+        self.state = TURN
 
     def command(self, rho: float, alpha: float) -> Twist:
         self.state, twist = turn_then_drive(
@@ -187,23 +201,25 @@ class ThesisGoToLandmark(_GoalController):
         return twist
 
 
-class GoToLandmark(_GoalController):
+class GoToLandmark(GoalBehaviour):
     """Proportional go-to-goal with speed, turn-rate and braking limits.
 
     :func:`proportional_command` every period: ``k_rho`` (1/s), ``k_alpha`` (1/s);
     ``max_speed`` (m/s), ``max_turn_rate`` (rad/s), ``decel`` (m/s^2) the braking the
-    chair can count on (its motors lag ~0.3 s). Stops for good within ``tolerance`` (m).
+    chair can count on (its motors lag ~0.3 s). Succeeds (stops for good) within
+    ``tolerance`` (m). ``rate_hz`` (Hz) how often it decides (default every period).
     """
 
     def __init__(self, goal: tuple[float, float], estimator: PoseEstimator,
                  tolerance: float = 0.1, max_speed: float = 0.8, max_turn_rate: float = 0.8,
-                 k_rho: float = 0.8, k_alpha: float = 1.5, decel: float = 0.5):
-        super().__init__(goal, estimator, tolerance)
-        self.max_speed = _positive("max_speed", max_speed, "m/s")
-        self.max_turn_rate = _positive("max_turn_rate", max_turn_rate, "rad/s")
-        self.k_rho = _positive("k_rho", k_rho, "1/s")
-        self.k_alpha = _positive("k_alpha", k_alpha, "1/s")
-        self.decel = _positive("decel", decel, "m/s^2")
+                 k_rho: float = 0.8, k_alpha: float = 1.5, decel: float = 0.5,
+                 rate_hz: float = LOOP_RATE_HZ):
+        super().__init__(goal, estimator, tolerance, rate_hz)
+        self.max_speed = positive_number("max_speed", max_speed, "m/s")
+        self.max_turn_rate = positive_number("max_turn_rate", max_turn_rate, "rad/s")
+        self.k_rho = positive_number("k_rho", k_rho, "1/s")
+        self.k_alpha = positive_number("k_alpha", k_alpha, "1/s")
+        self.decel = positive_number("decel", decel, "m/s^2")
 
     def command(self, rho: float, alpha: float) -> Twist:
         return proportional_command(rho, alpha, k_rho=self.k_rho, k_alpha=self.k_alpha,

@@ -1,8 +1,8 @@
 """Follow a list of waypoints: one :class:`GoToLandmark` leg after another.
 
-:class:`FollowWaypoints` is a controller for ``SimBase.run`` (or a real chair's
-``run``): it drives to each ``(x, y)`` in turn, switching to the next as soon as the
-current one is within ``tolerance``, and stops after the last. It steers by any pose
+:class:`FollowWaypoints` is a behaviour (a controller for ``Base.run``): it drives to
+each ``(x, y)`` in turn, switching to the next as soon as the current one is within
+``tolerance``, and succeeds after the last. It steers by any pose
 estimator (``update_frame(frame) -> Pose2D``). :class:`GroundTruth` is the
 simulator's own pose, for routes that must not depend on the estimators being
 tested: the filters then only listen, they never steer.
@@ -15,9 +15,9 @@ sharp turns, braking and starting again.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
+from abcwc.behaviours.base import LOOP_RATE_HZ, BehaviourBase, finite_point
 from abcwc.behaviours.landmark import GoToLandmark, PoseEstimator
 from abcwc.types import Pose2D, SensorFrame, Twist
 
@@ -37,45 +37,52 @@ class GroundTruth:
         return frame.pose
 
 
-class FollowWaypoints:
-    """Drive through ``waypoints`` in order, then stop.
+class FollowWaypoints(BehaviourBase):
+    """Drive through ``waypoints`` in order, then stop (succeeded).
 
     ``estimator`` gives the pose to steer by (default :class:`GroundTruth`);
-    ``tolerance`` (m) is how close counts as reached; the other keywords go to each
-    :class:`GoToLandmark` leg (``max_speed`` m/s, ``max_turn_rate`` rad/s, gains).
-    :attr:`index` is the waypoint being driven to; :attr:`done` is set after the last.
+    ``tolerance`` (m) is how close counts as reached; the other keywords go to the
+    :class:`GoToLandmark` that drives each leg (``max_speed`` m/s, ``max_turn_rate``
+    rad/s, gains). :attr:`index` is the waypoint being driven to.
     """
 
     def __init__(self, waypoints: Sequence[tuple[float, float]],
                  estimator: PoseEstimator | None = None, tolerance: float = 0.5,
-                 max_speed: float = 0.9, **leg_options: float):
-        points = [tuple(map(float, point)) for point in waypoints]
-        if not points or any(len(p) != 2 or not all(map(math.isfinite, p)) for p in points):
+                 max_speed: float = 0.9, rate_hz: float = LOOP_RATE_HZ,
+                 **leg_options: float):
+        super().__init__(rate_hz)
+        points = [] if isinstance(waypoints, (str, bytes)) else list(waypoints)
+        if not points:
             raise ValueError("waypoints must be a non-empty list of finite (x, y) in metres, "
                              f"got {waypoints!r}")
-        self.waypoints: list[tuple[float, float]] = points  # type: ignore[assignment]
-        self.estimator = estimator or GroundTruth()
-        self.tolerance = tolerance
-        self.leg_options = dict(leg_options, max_speed=max_speed)
+        self.waypoints = [finite_point(point, f"waypoint {k}") for k, point in enumerate(points)]
         self.index = 0
-        self.leg = self._leg(0)
-
-    def _leg(self, index: int) -> GoToLandmark:
-        return GoToLandmark(self.waypoints[index], self.estimator, tolerance=self.tolerance,
-                            **self.leg_options)
+        self.leg = GoToLandmark(self.waypoints[0], estimator or GroundTruth(),
+                                tolerance=tolerance, max_speed=max_speed, **leg_options)
 
     @property
-    def done(self) -> bool:
-        """True once the last waypoint has been reached."""
-        return self.index == len(self.waypoints) - 1 and self.leg.reached
+    def estimator(self) -> PoseEstimator:
+        """The pose estimator the legs steer by."""
+        return self.leg.estimator
 
-    def __call__(self, frame: SensorFrame) -> Twist:
-        command = self.leg(frame)
-        if self.leg.reached and self.index < len(self.waypoints) - 1:
+    def observe(self, frame: SensorFrame) -> None:
+        self.leg.observe(frame)
+
+    def update(self, frame: SensorFrame) -> Twist:
+        if self.leg.rho <= self.leg.tolerance:
+            if self.index == len(self.waypoints) - 1:
+                self.succeed()
+                return Twist(0.0, 0.0)
             self.index += 1
-            self.leg = self._leg(self.index)
-            command = self.leg(frame)
-        return command
+            self.leg.set_goal(self.waypoints[self.index])
+        return self.leg.update(frame)
+
+    def reset(self) -> None:
+        """Start the route again from its first waypoint."""
+        super().reset()
+        self.index = 0
+        self.leg.reset()
+        self.leg.set_goal(self.waypoints[0])
 
 
 def floor_mixed_drive(laps: int = 6) -> list[tuple[float, float]]:

@@ -27,18 +27,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from abcwc.checks.report import checker, expect, expect_close, format_value
-from abcwc.estimation.umbmark import (
-    THESIS_SIDE,
-    alpha_beta,
-    centres_of_gravity,
-    curve_radius,
-    e_max_syst,
-    load_thesis_trials,
-    model_return_error,
-    wheel_base_ratio,
-    wheel_correction_factors,
-    wheel_diameter_ratio,
-)
+from abcwc.estimation import umbmark
 from abcwc.params import default_params
 
 __all__ = [
@@ -63,30 +52,30 @@ def reference_centres_of_gravity_and_emax(cw_errors, ccw_errors
 
     ``*_errors`` are ``(n, 2)`` or ``(n, 3)`` return errors; a theta column is ignored.
     """
-    cg_cw, cg_ccw = centres_of_gravity(cw_errors, ccw_errors)
-    return cg_cw, cg_ccw, e_max_syst(cw_errors, ccw_errors)
+    cg_cw, cg_ccw = umbmark.centres_of_gravity(cw_errors, ccw_errors)
+    return cg_cw, cg_ccw, umbmark.e_max_syst(cw_errors, ccw_errors)
 
 
 def reference_alpha_beta_radius(cg_cw, cg_ccw, side: float) -> tuple[float, float, float]:
     """``(alpha, beta, R)`` (rad, rad, m) from the x coordinates of the two centres."""
-    alpha, beta = alpha_beta(cg_cw, cg_ccw, side, use="x")
-    return alpha, beta, curve_radius(beta, side)
+    alpha, beta = umbmark.alpha_beta(cg_cw, cg_ccw, side, use="x")
+    return alpha, beta, umbmark.curve_radius(beta, side)
 
 
 def reference_correction_factors(alpha: float, radius: float, wheel_base: float
                                  ) -> tuple[float, float, float, float, float]:
     """``(E_b, b_actual, E_d, c_left, c_right)`` for a nominal wheel base (m)."""
-    e_b = wheel_base_ratio(alpha)
+    e_b = umbmark.wheel_base_ratio(alpha)
     b_actual = e_b * wheel_base
-    e_d = wheel_diameter_ratio(radius, b_actual)
-    c_left, c_right = wheel_correction_factors(e_d)
+    e_d = umbmark.wheel_diameter_ratio(radius, b_actual)
+    c_left, c_right = umbmark.wheel_correction_factors(e_d)
     return e_b, b_actual, e_d, c_left, c_right
 
 
-def worked_example(e_d: float = 1.01, e_b: float = 1.03, side: float = THESIS_SIDE,
+def worked_example(e_d: float = 1.01, e_b: float = 1.03, side: float = umbmark.THESIS_SIDE,
                    wheel_base: float = WHEEL_BASE) -> dict[str, np.ndarray]:
     """Return errors ``{"cw": (1, 2), "ccw": (1, 2)}`` of the small-angle model (m)."""
-    return {d: np.array([model_return_error(side, wheel_base, e_d, e_b, d)])
+    return {d: np.array([umbmark.model_return_error(side, wheel_base, e_d, e_b, d)])
             for d in ("cw", "ccw")}
 
 
@@ -107,7 +96,7 @@ def _scatter(rng: np.random.Generator, centre, n: int, spread: float) -> np.ndar
 
 
 def _cases() -> list[tuple[str, np.ndarray, np.ndarray]]:
-    trials = load_thesis_trials()
+    trials = umbmark.load_thesis_trials()
     model = worked_example()
     rng = np.random.default_rng(8)
     return [
@@ -148,15 +137,16 @@ def centres_check(fn: Callable[[np.ndarray, np.ndarray], tuple]) -> str:
 
 def e_max_of_thesis() -> float:
     """E_max,syst of figure 51's numbers as printed (m): A.16's ``emax``."""
-    return e_max_syst(*_thesis_pair())
+    return umbmark.e_max_syst(*_thesis_pair())
 
 
 @checker("alpha, beta and R")
 def alpha_beta_radius_check(fn: Callable[[np.ndarray, np.ndarray, float], tuple]) -> str:
     """``fn(cg_cw, cg_ccw, side) -> (alpha, beta, R)`` against eqns 5.9-5.11 (radians)."""
     model = worked_example()
-    cases = [("the worked example", model["cw"][0], model["ccw"][0], THESIS_SIDE),
-             ("the thesis's centres", *centres_of_gravity(*_thesis_pair()), THESIS_SIDE),
+    side = umbmark.THESIS_SIDE
+    cases = [("the worked example", model["cw"][0], model["ccw"][0], side),
+             ("the thesis's centres", *umbmark.centres_of_gravity(*_thesis_pair()), side),
              ("a chair curving right, 4 m square", np.array([0.35, -0.42]),
               np.array([-0.55, -0.48]), 4.0)]
     for label, cg_cw, cg_ccw, side in cases:
@@ -177,13 +167,13 @@ def alpha_beta_radius_check(fn: Callable[[np.ndarray, np.ndarray, float], tuple]
         expect_close(got[2], radius, what=f"{label}: R", rtol=1e-9, unit="m",
                      ref="eqn 5.11: R = (L/2) / sin(beta/2)")
     alpha, beta, radius = reference_alpha_beta_radius(model["cw"][0], model["ccw"][0],
-                                                      THESIS_SIDE)
+                                                      umbmark.THESIS_SIDE)
     return (f"{len(cases)} cases; worked example alpha {alpha:.5f} rad, beta {beta:.5f} rad, "
             f"R {radius:.2f} m")
 
 
 def _thesis_pair() -> tuple[np.ndarray, np.ndarray]:
-    trials = load_thesis_trials()
+    trials = umbmark.load_thesis_trials()
     return trials["cw"], trials["ccw"]
 
 
@@ -206,7 +196,7 @@ def correction_factors_check(fn: Callable[[float, float, float], tuple]) -> str:
     for label, alpha, radius, base in cases:
         got = _parts(fn(alpha, radius, base), 5, ", ".join(names))
         expected = reference_correction_factors(alpha, radius, base)
-        with_nominal_b = wheel_diameter_ratio(radius, base)
+        with_nominal_b = umbmark.wheel_diameter_ratio(radius, base)
         expect(not (_number(got[2]) and math.isclose(float(got[2]), with_nominal_b,
                                                      rel_tol=1e-12)),
                f"{label}: E_d gave {format_value(got[2])}, from the nominal wheel base; the "

@@ -1,5 +1,8 @@
 """UMBmark: measure and correct systematic odometry errors (thesis 4.2.3, 4.3.6, A.16).
 
+The maths only: the square is driven by :class:`abcwc.behaviours.SquareDriver`, and the
+trials on a chair are run by :mod:`abcwc.experiments.umbmark_trials`.
+
 Borenstein and Feng, "Measurement and correction of systematic odometry errors in
 mobile robots", IEEE Trans. Robotics and Automation 12(6), 1996. The chair drives an
 ``L x L`` square clockwise and counter-clockwise by its own odometry, several times
@@ -54,16 +57,12 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from abcwc.estimation.odometry import Odometry
-from abcwc.geometry import wrap_angle
 from abcwc.paths import data_dir
-from abcwc.types import Pose2D, SensorFrame, Twist
 
 THESIS_SIDE = 3.5  # m, the thesis's square (A.16: L = 3.5)
 
@@ -259,181 +258,6 @@ def model_return_error(side: float, wheel_base: float, e_d: float, e_b: float,
     raise ValueError(f"direction must be 'cw' or 'ccw', got {direction!r}")
 
 
-# --------------------------------------------------------------------- driving
-class SquareDriver:
-    """Controller: drive one L x L square by odometry, then turn back to the start heading.
-
-    Each leg: steer at the corner (proportional in heading), slow down in proportion
-    to the distance left, stop on it; wait until the wheels stand still; turn on the
-    spot to the next heading (proportional, 0.1 degree tolerance); wait again. Call it
-    with every SensorFrame (``SimBase.run``); :attr:`done` is set at the end.
-
-    ``speed`` (m/s) and ``turn_rate`` (rad/s) are the most it asks for; ``settle`` (s)
-    the waits; ``brake_gain`` (1/s) the speed per metre left near a corner and
-    ``turn_gain`` (1/s) the turn rate per radian left (higher: quicker, less gentle).
-    """
-
-    def __init__(self, odometry: Odometry, side: float = THESIS_SIDE, direction: str = "ccw",
-                 speed: float = 0.5, turn_rate: float = 0.5, settle: float = 0.6,
-                 brake_gain: float = 0.8, turn_gain: float = 1.5):
-        if direction not in ("cw", "ccw"):
-            raise ValueError(f"direction must be 'cw' or 'ccw', got {direction!r}")
-        if not (brake_gain > 0 and turn_gain > 0):
-            raise ValueError(f"brake_gain and turn_gain must be > 0 (1/s), got {brake_gain!r}, "
-                             f"{turn_gain!r}")
-        self.odometry = odometry
-        self.side, self.speed, self.turn_rate, self.settle = side, speed, turn_rate, settle
-        self.brake_gain, self.turn_gain = brake_gain, turn_gain
-        self.sign = 1.0 if direction == "ccw" else -1.0
-        self.start: Pose2D | None = None
-        self.leg = 0
-        self.phase = "drive"
-        self.done = False
-        self._wait_until = 0.0
-
-    def _corner(self, i: int) -> tuple[float, float, float]:
-        """Corner i (1..4) in the odometry frame and the leg's heading."""
-        s = self.start
-        assert s is not None
-        pts = [(0, 0), (1, 0), (1, self.sign), (0, self.sign), (0, 0)]
-        px, py = pts[i]
-        c, sn = math.cos(s.theta), math.sin(s.theta)
-        x = s.x + self.side * (c * px - sn * py)
-        y = s.y + self.side * (sn * px + c * py)
-        return x, y, wrap_angle(s.theta + self.sign * (i - 1) * math.pi / 2)
-
-    def __call__(self, frame: SensorFrame) -> Twist:
-        pose = self.odometry.update_frame(frame)
-        if self.start is None:
-            self.start = pose
-        if self.done or frame.t < self._wait_until:
-            return Twist(0.0, 0.0)
-        if self.phase == "drive":
-            gx, gy, leg_heading = self._corner(self.leg + 1)
-            along = (gx - pose.x) * math.cos(leg_heading) + (gy - pose.y) * math.sin(leg_heading)
-            if along <= 0.002:
-                self.phase, self._wait_until = "turn", frame.t + self.settle
-                return Twist(0.0, 0.0)
-            bearing = math.atan2(gy - pose.y, gx - pose.x) if along > 0.3 else leg_heading
-            w = _clip(2.0 * wrap_angle(bearing - pose.theta), self.turn_rate)
-            return Twist(min(self.speed, max(0.03, self.brake_gain * along)), w)
-        target = self._corner(self.leg + 2)[2] if self.leg < 3 else self.start.theta
-        error = wrap_angle(target - pose.theta)
-        if abs(error) <= 0.0017:
-            self.leg += 1
-            self.phase, self._wait_until = "drive", frame.t + self.settle
-            self.done = self.leg == 4
-            return Twist(0.0, 0.0)
-        rate = math.copysign(max(0.02, min(self.turn_rate, self.turn_gain * abs(error))),
-                              error)
-        return Twist(0.0, rate)
-
-
-def _clip(value: float, limit: float) -> float:
-    return max(-limit, min(limit, value))
-
-
-@dataclass(frozen=True)
-class SquareRun:
-    """One square driven by odometry, in its start frame (x ahead, y left; m, rad)."""
-
-    direction: str
-    side: float  # m
-    seconds: float  # s of driving, including the wait for the wheels to stop
-    odometric_end: Pose2D  # where the odometry says the chair ended
-    true_path: np.ndarray  # (N, 3) ground truth in the start frame; NaN on the real chair
-
-    @property
-    def true_end(self) -> Pose2D | None:
-        """Where the chair really ended (start frame), or None without ground truth."""
-        last = self.true_path[-1] if len(self.true_path) else np.full(3, np.nan)
-        return Pose2D(*map(float, last)) if np.isfinite(last).all() else None
-
-    @property
-    def error(self) -> np.ndarray:
-        """Return error ``true - odometric`` end ``[x, y, theta]``; NaN without ground truth."""
-        true_end, end = self.true_end, self.odometric_end
-        if true_end is None:
-            return np.full(3, np.nan)
-        return np.array([true_end.x - end.x, true_end.y - end.y,
-                         wrap_angle(true_end.theta - end.theta)])
-
-
-def run_square(base, direction: str, side: float = THESIS_SIDE,
-               correction: tuple[float, float] = (1.0, 1.0), wheel_base: float | None = None,
-               speed: float = 0.5, turn_rate: float = 0.5, settle: float = 0.6,
-               timeout: float = 200.0, chunk: float = 1.0, **driver_options: float
-               ) -> SquareRun:
-    """Drive one UMBmark square on any chair body (simulator, firmware, real chair).
-
-    A :class:`SquareDriver` steers by odometry that starts at the origin of the start
-    frame; the chair runs in ``chunk`` second pieces until the square is done, then
-    one more second for the wheels to stop. Where the body reports ground truth (the
-    simulator, the firmware in the loop) the true path comes back in the start frame;
-    on the real chair it is NaN and you measure the end by hand. ``driver_options``
-    (``brake_gain``, ``turn_gain``) go to the :class:`SquareDriver`.
-    """
-    if not (chunk > 0 and timeout > 0):
-        raise ValueError(f"chunk and timeout must be > 0 s, got {chunk!r}, {timeout!r}")
-    params = base.params
-    first = base.read()
-    odometry = Odometry(params, correction=correction, wheel_base=wheel_base)
-    driver = SquareDriver(odometry, side, direction, speed, turn_rate, settle,
-                          **driver_options)
-    logs = []
-    elapsed = 0.0
-    while not driver.done:
-        if elapsed >= timeout:
-            raise RuntimeError(f"{direction} square not finished in {timeout:g} s")
-        logs.append(base.run(driver, chunk))
-        elapsed += chunk
-    logs.append(base.run(driver, 1.0))  # done: it sends zero; let the wheels stop
-    odometry.update_frame(base.read())
-    poses = np.vstack([log.pose for log in logs])
-    start = first.pose
-    if start is None or not np.isfinite(poses).all():
-        path = np.full_like(poses, np.nan)
-    else:
-        c, s = math.cos(start.theta), math.sin(start.theta)
-        dx, dy = poses[:, 0] - start.x, poses[:, 1] - start.y
-        heading = [wrap_angle(theta - start.theta) for theta in poses[:, 2]]
-        path = np.column_stack([c * dx + s * dy, -s * dx + c * dy, heading])
-    seconds = sum(len(log) for log in logs) * base.period
-    return SquareRun(direction, float(side), float(seconds), odometry.pose, path)
-
-
-def drive_square(sim, direction: str, side: float = THESIS_SIDE,
-                 correction: tuple[float, float] = (1.0, 1.0),
-                 wheel_base: float | None = None, speed: float = 0.5,
-                 timeout: float = 200.0) -> np.ndarray:
-    """Drive one UMBmark square on ``sim`` (a SimBase) by its odometry; return its error.
-
-    The return error ``true - odometric`` end (start frame, ``[x, y, theta]``) is what
-    the odometry got wrong; the controller's own stopping error cancels out. See
-    :func:`run_square` for the whole run.
-    """
-    run = run_square(sim, direction, side, correction, wheel_base, speed, timeout=timeout)
-    if run.true_end is None:
-        raise ValueError("drive_square needs a body with ground truth (the simulator); "
-                         "use run_square on the real chair")
-    return run.error
-
-
-def run_umbmark(make_sim: Callable[[int], object], runs: int = 5, side: float = THESIS_SIDE,
-                correction: tuple[float, float] = (1.0, 1.0),
-                wheel_base: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """``runs`` CW and ``runs`` CCW squares, each on a fresh ``make_sim(seed)``.
-
-    Returns the ``(runs, 3)`` CW and CCW return errors.
-    """
-    out = {}
-    for k, direction in enumerate(("cw", "ccw")):
-        out[direction] = np.array([
-            drive_square(make_sim(2 * i + k), direction, side, correction, wheel_base)
-            for i in range(runs)])
-    return out["cw"], out["ccw"]
-
-
 # --------------------------------------------------------------------- the thesis's trials
 def load_thesis_trials(path: str | Path | None = None) -> dict[str, np.ndarray]:
     """The ten end positions of figure 51: ``{"cw": (5, 3), "ccw": (5, 3)}`` (m, m, rad)."""
@@ -477,24 +301,3 @@ def thesis_a16_outputs(trials: dict[str, np.ndarray] | None = None) -> dict[str,
         "cov_x": float(np.var(x, ddof=1)), "cov_y": float(np.var(y, ddof=1)),
         "cov_theta": float(np.var(theta9, ddof=1)),
     }
-
-
-def calibrate_distance_scale(sim, seconds: float = 10.0, speed: float = 0.5,
-                             correction: tuple[float, float] = (1.0, 1.0)) -> float:
-    """True / odometric distance of a straight drive: the scale UMBmark cannot see.
-
-    UMBmark fixes the ratio of the wheels and the wheel base but keeps their mean
-    size; the mean comes from driving a measured distance (the thesis's firmware
-    carries such a calibration: 1242.7 counts per wheel turn, not the nominal 1258).
-    Multiply both correction factors by the result.
-    """
-    start = sim.pose
-    odometry = Odometry(sim.params, correction=correction, start=start)
-    odometry.update_frame(sim.frame)
-    t0 = sim.t
-    sim.run(lambda frame: Twist(speed, 0.0) if frame.t - t0 < seconds else Twist(), seconds + 1)
-    odometry.update_frame(sim.frame)
-    true = math.hypot(sim.pose.x - start.x, sim.pose.y - start.y)
-    if odometry.distance <= 0:
-        raise RuntimeError("the chair did not move forward; cannot calibrate the scale")
-    return true / odometry.distance

@@ -20,10 +20,11 @@ from __future__ import annotations
 
 import math
 
+from abcwc.behaviours.base import LOOP_RATE_HZ, BehaviourBase, positive_number
 from abcwc.control.pots import AvoidAction, angle_to_lr_byte, sonar_turn_angle
 from abcwc.control.velocity import twist_to_pot_command
 from abcwc.params import ChairParams, default_params
-from abcwc.types import PotCommand, SensorFrame, Twist
+from abcwc.types import NEUTRAL, PotCommand, SensorFrame, Twist
 
 FRONT, FRONT_LEFT, FRONT_RIGHT = 0, 1, 5  # IR ring indices (0, +60, -60 degrees)
 
@@ -35,30 +36,48 @@ def _ir_distance(reading: float, max_range: float) -> float:
     return min(reading, max_range)
 
 
-class SonarAvoider:
-    """A controller for :meth:`SimBase.run`: frame -> PotCommand.
+class SonarAvoider(BehaviourBase):
+    """A behaviour (a controller for ``Base.run``): frame -> PotCommand, until cancelled.
 
     ``cruise`` and ``slow`` are forward speeds (m/s) in the clear and while turning
-    at 1 m; ``near`` (m) is the IR distance that makes the chair back off for
-    ``reverse_time`` seconds.
+    at 1 m; ``near`` (m, 0..the IR range) is the IR distance that makes the chair back
+    off for ``reverse_time`` seconds. A wander has no goal: it runs until
+    :meth:`cancel`, then sends neutral pots.
     """
 
     def __init__(self, cruise: float = 0.6, slow: float = 0.3, near: float = 0.35,
-                 reverse_time: float = 1.2, params: ChairParams | None = None):
+                 reverse_time: float = 1.2, params: ChairParams | None = None,
+                 rate_hz: float = LOOP_RATE_HZ):
+        super().__init__(rate_hz)
         self.params = params or default_params()
         for name, value in (("cruise", cruise), ("slow", slow)):
-            if not (math.isfinite(value) and 0 < value <= self.params.max_speed):
+            if not (positive_number(name, value, "m/s") <= self.params.max_speed):
                 raise ValueError(f"{name} speed {value!r} outside 0..{self.params.max_speed:g} m/s")
-        self.cruise, self.slow, self.near, self.reverse_time = cruise, slow, near, reverse_time
+        ir_range = self.params.ir.max_range
+        if not positive_number("near", near, "m") < ir_range:
+            raise ValueError(f"near must be a distance in 0..{ir_range:g} m (the IR range), "
+                             f"got {near!r}")
+        self.cruise, self.slow = float(cruise), float(slow)
+        self.near = float(near)
+        self.reverse_time = positive_number("reverse_time", reverse_time, "s")
+        self.reset()
+
+    def reset(self) -> None:
+        """Start over: cruising, no turn side chosen."""
+        super().reset()
         self._turn_sign = 1.0  # +1 left, -1 right
         self._turning = False
         self._reverse_until = -math.inf
         self.last_action = AvoidAction.FORWARD
 
+    def stop_command(self) -> PotCommand:
+        """Neutral pots: the chair stands still."""
+        return NEUTRAL
+
     def _room(self, frame: SensorFrame, index: int) -> float:
         return _ir_distance(float(frame.ir[index]), self.params.ir.max_range)
 
-    def __call__(self, frame: SensorFrame) -> PotCommand:
+    def update(self, frame: SensorFrame) -> PotCommand:
         front_near = min(self._room(frame, k) for k in (FRONT, FRONT_LEFT, FRONT_RIGHT))
         if front_near < self.near and frame.t >= self._reverse_until:
             self._reverse_until = frame.t + self.reverse_time

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from abcwc.behaviours import FollowWaypoints, floor_mixed_drive
 from abcwc.estimation.ekf import (
     ChairEkf,
     absolute_fixes,
@@ -35,14 +36,10 @@ from abcwc.estimation.ekf import (
     run_ekf,
 )
 from abcwc.estimation.odometry import odometry_from_log
-from abcwc.estimation.umbmark import (
-    THESIS_SIDE,
-    calibrate_distance_scale,
-    e_max_syst,
-    run_umbmark,
-    umbmark_corrections,
-)
+from abcwc.estimation.umbmark import THESIS_SIDE, e_max_syst, umbmark_corrections
+from abcwc.experiments.umbmark_trials import calibrate_distance_scale, run_umbmark
 from abcwc.log import RunLog
+from abcwc.sim.base import SimBase
 from abcwc.sim.world import box_world
 from abcwc.types import Pose2D, Twist
 
@@ -103,8 +100,6 @@ class MonteCarloResult:
 
 def calibrate_worn_chair(side: float = THESIS_SIDE) -> OdometryCalibration:
     """UMBmark + distance scale on the worn chair, and the residual they leave."""
-    from abcwc.sim.base import SimBase
-
     hall = box_world(HALL_SIZE, HALL_SIZE, centred=True, name="hall")
 
     def make(seed: int) -> SimBase:
@@ -139,9 +134,6 @@ def filter_drive(log: RunLog, bias_prior: tuple[float, float],
 def ekf_run(seed: int, seconds: float, calibration: OdometryCalibration,
             fix_every: float = 10.0) -> EkfRun:
     """One seeded drive on the floor world, filtered; see the module docstring."""
-    from abcwc.behaviours import FollowWaypoints, floor_mixed_drive
-    from abcwc.sim.base import SimBase
-
     sim = SimBase("floor", seed=seed, errors="worn", people=False)
     bias, bias_std = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), STILL_SECONDS).gyro_z)
     log = sim.run(FollowWaypoints(floor_mixed_drive()), seconds)

@@ -91,3 +91,9 @@ def test_installed_wheel_runs_the_demo_outside_the_checkout(wheel, tmp_path):
     for name in ("demo_wander.png", "demo_wander.gif", "demo_wander.npz"):
         assert (out / name).stat().st_size > 1000
 
+    # what needs the repository says so
+    refused = subprocess.run([bin_dir / "abcwc", "bench", "notebooks"], cwd=tmp_path,
+                             env=env, capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2 and refused.stderr.startswith(
+        "abcwc: error: the notebooks benchmark (it runs solutions/) needs a checkout of the "
+        "abcwc repository"), refused.stderr

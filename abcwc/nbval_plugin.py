@@ -62,18 +62,19 @@ def kernel_environment() -> Iterator[None]:
     """Set :data:`KERNEL_ENV` in ``os.environ`` while a kernel starts, then restore it."""
     saved = {key: os.environ.get(key) for key in KERNEL_ENV}
     try:
-        for key, value in KERNEL_ENV.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
+        _set_environ(KERNEL_ENV)
         yield
     finally:
-        for key, value in saved.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
+        _set_environ(saved)
+
+
+def _set_environ(values: dict[str, str | None]) -> None:
+    """Set each variable in ``os.environ``; a ``None`` value removes it."""
+    for key, value in values.items():
+        if value is None:
+            os.environ.pop(key, None)
+        else:
+            os.environ[key] = value
 
 
 if IPyNbFile is not None:

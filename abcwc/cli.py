@@ -1,10 +1,24 @@
-"""The ``abcwc`` command: ``demo``, ``bench`` and ``course``."""
+"""The ``abcwc`` command: ``demo``, ``bench`` and ``course build``.
+
+A mistake in what the user gave (an unknown world or benchmark, a bad number, a missing
+data folder, ``course build`` outside a checkout, ...) ends the command with one line
+``abcwc: error: <message>`` on stderr and exit status 2; argparse reports what it
+finds itself (an unknown option, a value of the wrong type) its own way, also with 2.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
+
+PROG = "abcwc"
+USAGE_ERROR = 2
+
+USER_ERRORS: tuple[type[Exception], ...] = (ValueError, OSError)
+"""What the library raises for bad input: ValueError for a bad value (an unknown world or
+benchmark, a negative seed or duration), OSError for a file or folder (a missing data
+folder or world file, an output folder that cannot be written, no checkout)."""
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -18,8 +32,8 @@ def _demo(args: argparse.Namespace) -> int:
     from abcwc.sim import SimBase
 
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     chair = SimBase(world=args.world, seed=args.seed)
+    out.mkdir(parents=True, exist_ok=True)
     log = chair.run(SonarAvoider(), args.seconds, progress=not args.quiet)
     figure = viz.plot_run(log, chair.world)
     plot_path = out / "demo_wander.png"
@@ -41,47 +55,64 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
-def _course(rest: list[str]) -> int:
+def _course_build(args: argparse.Namespace) -> int:
     from abcwc import course
 
-    if not rest or rest[0] != "build":
-        print("usage: abcwc course build [--check] [--solutions DIR] [--course DIR]",
-              file=sys.stderr)
-        return 2
-    return course.main(rest[1:])
+    return course.run(args.solutions, args.course, check=args.check)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The command-line parser."""
-    parser = argparse.ArgumentParser(prog="abcwc", description=__doc__)
-    commands = parser.add_subparsers(dest="command", required=True)
+    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
     demo = commands.add_parser("demo", help="run the headless course demo")
     demo.add_argument("--out", default="abcwc-demo", help="folder for the plot, animation, log")
-    demo.add_argument("--world", default="lab")
+    demo.add_argument("--world", default="lab", help="a world's name or a .json world file")
     demo.add_argument("--seed", type=int, default=0)
     demo.add_argument("--seconds", type=float, default=300.0, help="simulated seconds")
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
+    demo.set_defaults(run=_demo)
+
     bench = commands.add_parser("bench", help="run the benchmarks")
     bench.add_argument("names", nargs="*", help="benchmarks to run (default: all)")
     bench.add_argument("--json", action="store_true", help="print JSON instead of a table")
     bench.add_argument("--repeats", type=int, default=3)
-    commands.add_parser("course", help="build the student notebooks: course build [--check]",
-                        add_help=False)
+    bench.set_defaults(run=_bench)
+
+    course = commands.add_parser("course", help="build the student notebooks: course build")
+    actions = course.add_subparsers(dest="action", required=True, metavar="ACTION")
+    build = actions.add_parser(
+        "build", help="regenerate course/ from solutions/ (in a checkout of the repository)",
+        description="Build the student notebooks in course/ from the solutions.")
+    build.add_argument("--check", action="store_true",
+                       help="write nothing; exit 1 if course/ is not what a build would write")
+    build.add_argument("--solutions", metavar="DIR",
+                       help="solution notebooks (default: solutions, in a checkout's root)")
+    build.add_argument("--course", metavar="DIR",
+                       help="student notebooks to write (default: course)")
+    build.set_defaults(run=_course_build)
     return parser
 
 
+def error_line(exc: BaseException) -> str:
+    """``abcwc: error: <message>`` for a user error, on one line."""
+    if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:
+        message = f"{exc.filename}: {exc.strerror}"  # not "[Errno 21] Is a directory: ..."
+    else:
+        message = str(exc) or type(exc).__name__
+    lines = (line.strip() for line in message.splitlines())
+    return f"{PROG}: error: {' '.join(line for line in lines if line)}"
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``abcwc`` console script."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    parser = build_parser()
-    if argv and argv[0] == "course":
-        return _course(argv[1:])
-    args = parser.parse_args(argv)
+    """Entry point of the ``abcwc`` console script; returns the exit status."""
+    args = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
     try:
-        return {"demo": _demo, "bench": _bench}[args.command](args)
-    except ValueError as exc:
-        parser.exit(2, f"abcwc {args.command}: {exc}\n")
-    return 1
+        return args.run(args)
+    except USER_ERRORS as exc:
+        print(error_line(exc), file=sys.stderr)
+        return USAGE_ERROR
 
 
 if __name__ == "__main__":

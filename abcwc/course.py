@@ -24,11 +24,9 @@ and fails (exit code 1) when ``course/`` differs from what a build would write.
 
 from __future__ import annotations
 
-import argparse
 import ast
 import hashlib
 import re
-import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,13 +35,15 @@ from typing import Any
 import nbformat
 from nbformat import NotebookNode
 
+from abcwc.paths import NotACheckoutError
+
 __all__ = [
     "Change",
     "CourseBuildError",
     "apply",
     "build",
-    "main",
     "plan",
+    "run",
     "student_notebook",
     "student_source",
 ]
@@ -319,7 +319,7 @@ def plan(
     if not source.is_dir():
         raise CourseBuildError(
             str(source),
-            "no such directory (run from the repository root or pass --solutions DIR)",
+            "no such directory of solution notebooks",
         )
     wanted: dict[str, str] = {}
     for path in sorted(source.glob("*.ipynb")):
@@ -368,51 +368,41 @@ def build(
     return [change.path for change in changes]
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``abcwc course build [--check] [--solutions DIR] [--course DIR]``; returns exit code."""
-    parser = argparse.ArgumentParser(
-        prog="abcwc course build",
-        description="Build the student notebooks in course/ from the solutions.",
-    )
-    parser.add_argument(
-        "--check",
-        action="store_true",
-        help="write nothing; exit 1 if course/ is not what a build would write",
-    )
-    parser.add_argument(
-        "--solutions",
-        default="solutions",
-        metavar="DIR",
-        help="solution notebooks (default: solutions)",
-    )
-    parser.add_argument(
-        "--course",
-        default="course",
-        metavar="DIR",
-        help="student notebooks to write (default: course)",
-    )
-    args = parser.parse_args(argv)
+def run(
+    solutions_dir: str | Path | None = None,
+    course_dir: str | Path | None = None,
+    check: bool = False,
+) -> int:
+    """``abcwc course build [--check]``: build (or check) and print what changed; the exit
+    code (1: ``check`` found ``course_dir`` out of date).
 
-    try:
-        changes = plan(args.solutions, args.course)
-    except CourseBuildError as exc:
-        print(f"abcwc course build: error: {exc}", file=sys.stderr)
-        return 2
-    total = len(list(Path(args.solutions).glob("*.ipynb")))
+    The folders default to ``solutions/`` and ``course/`` in the current directory, the
+    root of a checkout of the repository.
+
+    Raises:
+        NotACheckoutError: no folder given and no ``solutions/`` here.
+        CourseBuildError: a folder or a notebook is wrong; nothing was written.
+    """
+    if solutions_dir is None:
+        solutions_dir = Path("solutions")
+        if not solutions_dir.is_dir():
+            raise NotACheckoutError(
+                f"no solutions/ in {Path.cwd()}: `abcwc course build` works on a checkout of "
+                "the abcwc repository; run it from the repository's root or pass --solutions DIR"
+            )
+    course_dir = Path("course") if course_dir is None else Path(course_dir)
+    changes = plan(solutions_dir, course_dir)
+    total = len(list(Path(solutions_dir).glob("*.ipynb")))
     if not changes:
-        print(f"{args.course}/ is up to date ({total} notebook{'' if total == 1 else 's'})")
+        print(f"{course_dir}/ is up to date ({total} notebook{'' if total == 1 else 's'})")
         return 0
-    if args.check:
+    if check:
         for change in changes:
             print(f"stale: {change.path} ({change.reason})")
-        print(f"{args.course}/ is out of date: run `abcwc course build`")
+        print(f"{course_dir}/ is out of date: run `abcwc course build`")
         return 1
     apply(changes)
     for change in changes:
         verb = "removed" if change.text is None else "wrote"
         print(f"{verb} {change.path} ({change.reason})")
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

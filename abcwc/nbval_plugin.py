@@ -30,7 +30,7 @@ from pathlib import Path
 import pytest
 
 from abcwc.connect import SIMAVR_PORT
-from abcwc.paths import REPO_ROOT as ROOT
+from abcwc.paths import checkout_root
 
 
 def firmware_in_loop_available() -> bool:
@@ -45,7 +45,8 @@ SANITIZE_FILE = "tests/nbval_sanitize.cfg"  # under the pytest rootdir
 KERNEL_ENV = {
     "MPLBACKEND": "module://matplotlib_inline.backend_inline",
     "PYTHONHASHSEED": "0",
-    "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
+    "PYTHONPATH": os.pathsep.join(
+        str(p) for p in (checkout_root(), os.environ.get("PYTHONPATH")) if p),
     # None: removed from the kernel's environment
     "ABCWC_PORT": SIMAVR_PORT if firmware_in_loop_available() else None,
 }
@@ -61,18 +62,19 @@ def kernel_environment() -> Iterator[None]:
     """Set :data:`KERNEL_ENV` in ``os.environ`` while a kernel starts, then restore it."""
     saved = {key: os.environ.get(key) for key in KERNEL_ENV}
     try:
-        for key, value in KERNEL_ENV.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
+        _set_environ(KERNEL_ENV)
         yield
     finally:
-        for key, value in saved.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
+        _set_environ(saved)
+
+
+def _set_environ(values: dict[str, str | None]) -> None:
+    """Set each variable in ``os.environ``; a ``None`` value removes it."""
+    for key, value in values.items():
+        if value is None:
+            os.environ.pop(key, None)
+        else:
+            os.environ[key] = value
 
 
 if IPyNbFile is not None:

@@ -1,25 +1,79 @@
-"""Where the project's data lives.
+"""Where the project's data lives, and whether abcwc runs from a checkout.
 
-The library reads its chair parameters and worlds from the repository's top-level
-``data/`` folder. Set ``ABCWC_DATA`` to use another copy (for example a class's own
-worlds).
+The library reads its chair parameters and worlds from a data folder: the repository's
+top-level ``data/`` when abcwc runs from a checkout (``pip install -e .``), else the
+copy an installed wheel ships as ``abcwc/data``. Set ``ABCWC_DATA`` to use another copy
+(for example a class's own worlds).
+
+A few tools work on the repository itself rather than on the library (``abcwc course
+build`` and the notebook benchmark read ``solutions/``; the firmware in the loop builds
+``firmware/``); they call :func:`require_checkout`, which says so when abcwc is an
+installed copy.
 """
 
 from __future__ import annotations
 
 import os
+from importlib import resources
 from pathlib import Path
 
-REPO_ROOT = Path(__file__).resolve().parent.parent
+__all__ = ["DATA_ENV", "NotACheckoutError", "checkout_root", "data_dir", "require_checkout"]
+
+DATA_ENV = "ABCWC_DATA"
+"""Environment variable naming a data folder to use instead of the project's own."""
+
+_PACKAGE_DIR = Path(__file__).resolve().parent
+
+
+class NotACheckoutError(FileNotFoundError):
+    """A tool that works on the repository ran from an installed copy of abcwc."""
+
+
+def checkout_root() -> Path | None:
+    """The repository checkout this ``abcwc`` is imported from, or ``None`` when installed.
+
+    A checkout is recognised by the ``pyproject.toml`` beside the package folder; an
+    installed package sits in ``site-packages``, which has none.
+    """
+    root = _PACKAGE_DIR.parent
+    return root if (root / "pyproject.toml").is_file() else None
+
+
+def require_checkout(what: str) -> Path:
+    """The checkout's root; :class:`NotACheckoutError` naming ``what`` when there is none."""
+    root = checkout_root()
+    if root is None:
+        raise NotACheckoutError(
+            f"{what} needs a checkout of the abcwc repository, but abcwc is installed at "
+            f"{_PACKAGE_DIR}; clone the repository and run `pip install -e .` in it"
+        )
+    return root
 
 
 def data_dir() -> Path:
-    """The data folder: ``$ABCWC_DATA`` if set, else ``<repo>/data``."""
-    override = os.environ.get("ABCWC_DATA")
-    path = Path(override) if override else REPO_ROOT / "data"
-    if not path.is_dir():
-        raise FileNotFoundError(
-            f"abcwc data folder {path} not found; install abcwc from a checkout "
-            "(pip install -e .) or set ABCWC_DATA to a copy of the repository's data/"
-        )
-    return path
+    """The data folder: ``$ABCWC_DATA`` if set, else the checkout's ``data/``, else the
+    copy installed with the package (``abcwc/data``).
+
+    Raises:
+        FileNotFoundError: ``$ABCWC_DATA`` is not a folder, or no data folder exists.
+    """
+    override = os.environ.get(DATA_ENV)
+    if override:
+        path = Path(override)
+        if not path.is_dir():
+            raise FileNotFoundError(f"{DATA_ENV}={override} is not a folder")
+        return path
+    tried = []
+    root = checkout_root()
+    if root is not None:
+        tried.append(root / "data")
+    packaged = resources.files("abcwc") / "data"
+    if isinstance(packaged, Path):  # not inside a zip file
+        tried.append(packaged)
+    for path in tried:
+        if path.is_dir():
+            return path
+    raise FileNotFoundError(
+        f"abcwc data folder not found (looked in {', '.join(map(str, tried))}); reinstall "
+        f"abcwc or set {DATA_ENV} to a copy of the repository's data/"
+    )

@@ -13,10 +13,16 @@ import nbformat
 import pytest
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 
-from abcwc.course import CourseBuildError, build, main, plan, student_notebook, student_source
+from abcwc import cli
+from abcwc.course import CourseBuildError, build, plan, student_notebook, student_source
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = Path(__file__).resolve().parent / "data" / "notebooks"
+
+
+def main(args: list[str]) -> int:
+    """``abcwc course build ARGS``; its exit status."""
+    return cli.main(["course", "build", *args])
 
 
 def code(source: str) -> str:
@@ -312,7 +318,8 @@ def test_main_build_and_check_exit_codes_and_messages(course_tree, capsys):
 
 def test_main_reports_build_errors_with_exit_code_2(tmp_path, capsys):
     assert main(["--solutions", str(tmp_path / "nope"), "--course", str(tmp_path)]) == 2
-    assert "no such directory" in capsys.readouterr().err
+    assert capsys.readouterr().err == (
+        f"abcwc: error: {tmp_path / 'nope'}: no such directory of solution notebooks\n")
 
 
 def test_example_course_notebook_is_up_to_date():

@@ -34,8 +34,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from abcwc.geometry import PoseLike, compose, inverse_transform_points, transform_points
+from abcwc.log import RunLog
 from abcwc.mapping.raytrace import walk_cells
-from abcwc.types import LaserScan, Pose2D
+from abcwc.params import ChairParams, default_params
+from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D
 
 FREE = 0
 """Trinary value of a free cell (nav_msgs/OccupancyGrid's 0)."""
@@ -234,6 +236,10 @@ class OccupancyGrid:
             raise ValueError(f"trinary cells must be a 2-D array of {OCCUPIED}, {FREE}, "
                              f"{UNKNOWN}")
         grid = cls(resolution, cells.shape[1], cells.shape[0], origin, model)
+        m = grid.model
+        if not to_probability(m.l_min) < FREE_THRESH < OCCUPIED_THRESH < to_probability(m.l_max):
+            raise ValueError(f"the model's clamp [{m.l_min}, {m.l_max}] (log odds) must reach "
+                             f"past the default thresholds p = {FREE_THRESH}, {OCCUPIED_THRESH}")
         grid.log_odds[cells == OCCUPIED] = grid.model.l_max
         grid.log_odds[cells == FREE] = grid.model.l_min
         return grid
@@ -244,3 +250,34 @@ def _pose_array(pose: PoseLike) -> np.ndarray:
     if isinstance(pose, Pose2D):
         return pose.as_array()
     return np.asarray(pose, dtype=float)
+
+
+def scan_rows(log: RunLog, frame_id: str = LIDAR_FRAME) -> np.ndarray:
+    """For each scan of ``frame_id`` in ``log``, the row of the log's channels nearest its
+    stamp (the row it was taken in, for the simulator's logs)."""
+    scans = log.scans.get(frame_id)
+    if scans is None:
+        raise ValueError(f"the log has no scans of {frame_id!r}; it has {sorted(log.scans)}")
+    t = log.t
+    right = np.clip(np.searchsorted(t, scans.stamps), 1, len(t) - 1)
+    left = right - 1
+    return np.where(np.abs(t[left] - scans.stamps) <= np.abs(t[right] - scans.stamps),
+                    left, right)
+
+
+def integrate_log(grid: OccupancyGrid, log: RunLog, frame_id: str = LIDAR_FRAME,
+                  poses: np.ndarray | None = None,
+                  params: ChairParams | None = None) -> int:
+    """Add every scan of ``frame_id`` in ``log`` to ``grid``, each from the chair's pose in
+    the row nearest its stamp: ``poses`` ((N, 3) map poses, one per log row, e.g. an
+    estimate) or the log's ground truth ``pose``; the scanner's mount comes from
+    ``params`` (the chair's by default). Returns how many scans were added."""
+    p = params or default_params()
+    mount = p.sensors[frame_id].mount  # type: ignore[union-attr]
+    rows = scan_rows(log, frame_id)
+    base = np.asarray(log.pose if poses is None else poses, dtype=float)[rows]
+    scanner = compose(base, np.broadcast_to(np.asarray(mount, dtype=float), base.shape))
+    scans = log.scans[frame_id]
+    for k in range(len(rows)):  # one scan at a time: each is one whole-array update
+        grid.integrate(scans.scan(k), scanner[k])
+    return len(rows)

@@ -10,6 +10,7 @@ import pytest
 from scipy.ndimage import binary_dilation
 
 import abcwc
+from abcwc.log import RunLog, ScanLog
 from abcwc.mapping.grid import (
     FREE,
     OCCUPIED,
@@ -23,6 +24,7 @@ from abcwc.mapping.grid import (
 from abcwc.mapping.map_io import MapFileError, load_map, read_pgm, save_map
 from abcwc.mapping.raytrace import walk_cells
 from abcwc.mapping.truth import precision_recall, rasterise_walls
+from abcwc.params import default_params
 from abcwc.types import LaserScan, Twist
 
 # ------------------------------------------------------------ reference implementations
@@ -175,7 +177,30 @@ def test_bad_grids_and_models_are_refused():
         InverseSensorModel(l_occ=-0.5)
     with pytest.raises(ValueError, match="free_thresh <= occupied_thresh"):
         OccupancyGrid(0.1, 2, 2).trinary(occupied_thresh=0.2, free_thresh=0.3)
+    with pytest.raises(ValueError, match="origin must be"):
+        OccupancyGrid(0.1, 2, 2, (1.0, 2.0))
     assert to_log_odds(0.5) == 0.0 and to_probability(to_log_odds(0.7)) == pytest.approx(0.7)
+
+
+def test_a_log_adds_each_scan_from_the_pose_it_was_taken_at():
+    scans = ScanLog(np.array([0.0, 0.1]), np.array([[1.0], [0.5]]), 0.0, 0.1, 0.1, 1.5)
+    t = np.arange(1, 11) * 0.02
+    pose = np.zeros((10, 3))
+    pose[5:] = [0.0, 0.5, 0.0]  # the second scan (t = 0.1, row 4) is still from y = 0
+    log = RunLog(t=t, pose=pose, scans={"lidar_link": scans})
+    grid = OccupancyGrid(0.1, 30, 10, (-0.55, -0.55, 0.0))  # y = 0 the middle of row 5
+    assert integrate_log(grid, log) == 2
+    mount_x = default_params().lidar.mount[0]  # 0.1 m ahead of base_link
+    first, second = (int((mount_x + r + 0.55) / 0.1) for r in (1.0, 0.5))
+    m = grid.model
+    assert grid.log_odds[5, first] == m.l_occ
+    assert grid.log_odds[5, second] == pytest.approx(m.l_free + m.l_occ)  # passed, then hit
+    assert grid.log_odds[5, second - 1] == 2 * grid.model.l_free
+    with pytest.raises(ValueError, match="not finite"):
+        integrate_log(grid, RunLog(t=t, pose=np.full((10, 3), np.nan),
+                                   scans={"lidar_link": scans}))
+    with pytest.raises(ValueError, match="no scans of 'depth_scan_link'"):
+        integrate_log(grid, log, frame_id="depth_scan_link")
 
 
 # ------------------------------------------------------------ map files

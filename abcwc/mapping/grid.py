@@ -67,8 +67,9 @@ def to_probability(l_odds: float | np.ndarray) -> float | np.ndarray:
 class InverseSensorModel:
     """Log-odds increments for a beam's return cell (``l_occ`` > 0) and the cells it
     crossed (``l_free`` < 0), and the clamp ``[l_min, l_max]`` (all in log odds; the prior
-    ``l_0`` is 0). Defaults: p = 0.7 for a hit and 0.4 for a pass (l = 0.85, -0.41, near
-    gmapping's), clamped to p in [0.12, 0.97] (OctoMap's)."""
+    ``l_0`` is 0). Defaults are OctoMap's: p = 0.7 for a hit and 0.4 for a pass (l = 0.85,
+    -0.4), clamped to p in [0.12, 0.97]. With them a cell reads free (p < 0.196) after four
+    passes and occupied (p > 0.65) after one return."""
 
     l_occ: float = 0.85
     l_free: float = -0.4
@@ -100,9 +101,10 @@ class OccupancyGrid:
         for name, value in (("width", width), ("height", height)):
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
                 raise ValueError(f"{name} must be a whole number of cells >= 1, got {value!r}")
-        pose = Pose2D(*map(float, origin)) if not isinstance(origin, Pose2D) else origin
-        if not all(math.isfinite(v) for v in (pose.x, pose.y, pose.theta)):
-            raise ValueError(f"origin must be finite (x m, y m, yaw rad), got {origin!r}")
+        values = _pose_array(origin)
+        if values.shape != (3,) or not np.isfinite(values).all():
+            raise ValueError(f"origin must be a finite (x m, y m, yaw rad), got {origin!r}")
+        pose = Pose2D(*map(float, values))
         self.resolution = float(resolution)
         self.width, self.height = int(width), int(height)
         self.origin = pose
@@ -129,8 +131,9 @@ class OccupancyGrid:
         return self.height, self.width
 
     def to_cell_units(self, points: np.ndarray) -> np.ndarray:
-        """Map points ``(..., 2)`` (m) in the grid's frame divided by the resolution:
-        cell ``(col, row) = floor`` of the answer."""
+        """Map-frame points ``(..., 2)`` (m) in grid units: their x, y in the grid's frame
+        (from ``origin``) divided by the resolution, so their cell is ``(col, row) = floor``
+        of the answer."""
         return inverse_transform_points(self.origin, np.asarray(points, float)) / self.resolution
 
     def world_to_cell(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -259,6 +262,8 @@ def scan_rows(log: RunLog, frame_id: str = LIDAR_FRAME) -> np.ndarray:
     if scans is None:
         raise ValueError(f"the log has no scans of {frame_id!r}; it has {sorted(log.scans)}")
     t = log.t
+    if len(t) < 2:
+        return np.zeros(len(scans.stamps), dtype=np.int64)
     right = np.clip(np.searchsorted(t, scans.stamps), 1, len(t) - 1)
     left = right - 1
     return np.where(np.abs(t[left] - scans.stamps) <= np.abs(t[right] - scans.stamps),
@@ -275,7 +280,14 @@ def integrate_log(grid: OccupancyGrid, log: RunLog, frame_id: str = LIDAR_FRAME,
     p = params or default_params()
     mount = p.sensors[frame_id].mount  # type: ignore[union-attr]
     rows = scan_rows(log, frame_id)
-    base = np.asarray(log.pose if poses is None else poses, dtype=float)[rows]
+    poses = np.asarray(log.pose if poses is None else poses, dtype=float)
+    if poses.shape != (len(log), 3):
+        raise ValueError(f"poses must be (N, 3), one per log row ({len(log)}), "
+                         f"got {poses.shape}")
+    base = poses[rows]
+    if not np.isfinite(base).all():
+        raise ValueError("a scan's pose is not finite (a real chair's log has no ground "
+                         "truth: give poses, e.g. an estimate)")
     scanner = compose(base, np.broadcast_to(np.asarray(mount, dtype=float), base.shape))
     scans = log.scans[frame_id]
     for k in range(len(rows)):  # one scan at a time: each is one whole-array update

@@ -17,7 +17,8 @@ largest y. A pixel value ``v`` reads as ``p = (255 - v) / 255`` (``v / 255`` whe
 otherwise. map_saver writes occupied cells 0, free 254 and unknown 205 (p = 0.196078...,
 just above ``free_thresh`` 0.196, hence that odd default), and so does :func:`save_map`.
 
-Only ``mode: trinary`` (map_server's default when ``mode`` is absent) and PGM images are
+Many ROS consumers (costmap_2d, AMCL) ignore the origin's yaw: keep it 0 for maps meant
+for them. Only ``mode: trinary`` (map_server's default when ``mode`` is absent) and PGM images are
 read; anything else is refused with a message naming the file.
 """
 

@@ -3,8 +3,11 @@ in the simulator's lab scored against its true walls."""
 
 from __future__ import annotations
 
+import ast
 import math
+from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 from scipy.ndimage import binary_dilation
@@ -223,6 +226,7 @@ def test_saved_maps_reload_identically(tmp_path):
     expected = np.select([grid.trinary() == OCCUPIED, grid.trinary() == FREE], [0, 254], 205)
     assert (pixels == expected[::-1]).all()  # the image's top row is the largest y
     assert (tmp_path / "lab.pgm").read_bytes().startswith(b"P5\n")
+    assert (cv2.imread(str(tmp_path / "lab.pgm"), cv2.IMREAD_UNCHANGED) == pixels).all()
 
 
 def test_a_loaded_map_follows_map_server_thresholds(tmp_path):
@@ -250,6 +254,7 @@ GOOD_IMAGE = b"P5\n2 2\n255\n" + bytes([0, 254, 205, 254])
     ({"mode": "scale"}, GOOD_IMAGE, "only trinary"),
     ({"image": "absent.pgm"}, GOOD_IMAGE, "map image not found"),
     ({}, b"P2\n2 2\n255\n0 254 205 254\n", "not a binary PGM"),
+    ({}, b"P55 2 255\n" + bytes(4), "not a binary PGM"),
     ({}, b"\x89PNG\r\n\x1a\n", "not a binary PGM"),
     ({}, b"P5\n2 2\n65535\n" + bytes(8), "maxval 65535"),
     ({}, GOOD_IMAGE[:-1], "needs 4 pixel bytes, has 3"),
@@ -307,3 +312,20 @@ def test_a_map_of_the_lab_from_true_poses_finds_the_walls_it_saw():
     # side) are near observed free cells but get few returns: recall is lower there
     assert precision >= 0.9 and recall >= 0.85
     assert (truth & seen).sum() >= 0.75 * truth.sum()  # most of the lab was in view
+
+
+MAPPING = Path(__file__).resolve().parent.parent / "abcwc" / "mapping"
+ABOVE_MAPPING = ("abcwc.sim", "abcwc.base", "abcwc.connect", "abcwc.behaviours",
+                 "abcwc.experiments", "abcwc.navigation", "abcwc.hw", "abcwc.viz",
+                 "abcwc.checks", "abcwc.teleop", "abcwc.cli", "abcwc.control")
+
+
+def test_the_grid_modules_import_nothing_above_them():
+    """The grid, map files and scoring use messages, geometry, logs and parameters only."""
+    offending = []
+    for name in ("grid.py", "raytrace.py", "map_io.py", "truth.py"):
+        for node in ast.walk(ast.parse((MAPPING / name).read_text())):
+            modules = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
+                       else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            offending += [f"{name}: {m}" for m in modules if m.startswith(ABOVE_MAPPING)]
+    assert not offending, offending

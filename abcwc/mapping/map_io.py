@@ -170,7 +170,7 @@ def read_pgm(path: str | Path) -> np.ndarray:
         data = path.read_bytes()
     except FileNotFoundError:
         raise MapFileError(f"{path}: map image not found") from None
-    if data[:2] != b"P5":
+    if data[:2] != b"P5" or not data[2:3].isspace():
         raise MapFileError(f"{path}: not a binary PGM: magic {data[:2]!r}, expected b'P5'")
     at = 2
     fields = []

@@ -165,6 +165,14 @@ def test_cells_follow_map_server_conventions():
     assert square.shape == (20, 40) and square.origin.x == -1.5
 
 
+def test_a_scan_from_a_mounted_scanner_starts_at_the_mount():
+    from_base, direct = OccupancyGrid(0.1, 30, 30), OccupancyGrid(0.1, 30, 30)
+    from_base.integrate_from_base(one_beam(1.0), (1.05, 1.05, math.pi / 2), (0.3, 0.0, 0.0))
+    direct.integrate(one_beam(1.0), (1.05, 1.35, math.pi / 2))
+    assert (from_base.log_odds == direct.log_odds).all()
+    assert from_base.log_odds[23, 10] == from_base.model.l_occ  # return at (1.05, 2.35)
+
+
 def test_a_beam_leaving_the_grid_updates_the_cells_inside_it():
     grid = OccupancyGrid(0.1, 10, 10)
     grid.integrate(one_beam(3.0), (0.55, 0.55, 0.0))

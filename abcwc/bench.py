@@ -76,6 +76,36 @@ def bench_nees() -> dict[str, float]:
             "raw odometry final error, mean (m)": statistics.fmean(odometry)}
 
 
+def _scans_per_second(world: str, start: str | None, seconds: float = 10.0) -> float:
+    """Lidar scans (360 beams, 12 m) of a drive integrated into a 0.05 m grid per second."""
+    import numpy as np
+
+    from abcwc.geometry import compose
+    from abcwc.mapping.grid import OccupancyGrid, scan_rows
+    from abcwc.sim.base import SimBase
+    from abcwc.sim.world import box_world
+
+    body = box_world() if world == "box" else world  # an empty 40 x 40 m room
+    chair = SimBase(world=body, start=start, lidar=True, people=False)
+    log = chair.drive(Twist(0.4, 0.35), seconds)
+    mount = np.asarray(chair.params.lidar.mount)
+    poses = compose(log.pose[scan_rows(log)], np.broadcast_to(mount, (len(log.lidar.stamps), 3)))
+    scans = [log.lidar.scan(k) for k in range(len(poses))]
+    grid = OccupancyGrid.covering(*chair.world.bounds, 0.05, margin=1.0)
+    start_time = time.perf_counter()
+    for scan, pose in zip(scans, poses):
+        grid.integrate(scan, pose)
+    return len(scans) / (time.perf_counter() - start_time)
+
+
+@benchmark("grid", "occupancy grid: 360-beam lidar scans integrated per second, 0.05 m cells")
+def bench_grid() -> dict[str, float]:
+    return {
+        "scans/s, lab (10 x 8 m, most beams return)": _scans_per_second("lab", "centre"),
+        "scans/s, 40 m box (no returns: every beam 12 m)": _scans_per_second("box", None),
+    }
+
+
 _NOTEBOOK_RUNNER = """
 import resource, sys, time
 import nbformat

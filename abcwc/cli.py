@@ -1,4 +1,4 @@
-"""The ``abcwc`` command: ``demo``, ``bench`` and ``course``."""
+"""The ``abcwc`` command: ``demo``, ``bench``, ``course`` and ``posegraph``."""
 
 from __future__ import annotations
 
@@ -41,6 +41,28 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _posegraph(args: argparse.Namespace) -> int:
+    """Optimise a g2o pose graph; one ``abcwc: error:`` line and status 2 on bad input."""
+    from abcwc.mapping.g2o import read_g2o, write_g2o
+    from abcwc.mapping.posegraph import optimise
+
+    try:
+        graph = read_g2o(args.file)
+        poses, result = optimise(graph, robust=args.robust, initial=args.initial,
+                                 max_iterations=args.max_iterations,
+                                 progress=args.progress)
+        if args.out:
+            write_g2o(graph.with_poses(poses), args.out)
+    except (ValueError, OSError) as exc:
+        print(f"abcwc: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"chi2 initial {result.chi2_initial:.6g} final {result.chi2_final:.6g}, "
+          f"{result.iterations} iterations, {result.seconds:.3f} s ({result.reason})")
+    if args.out:
+        print(f"wrote {args.out}")
+    return 0
+
+
 def _course(rest: list[str]) -> int:
     from abcwc import course
 
@@ -65,6 +87,14 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("names", nargs="*", help="benchmarks to run (default: all)")
     bench.add_argument("--json", action="store_true", help="print JSON instead of a table")
     bench.add_argument("--repeats", type=int, default=3)
+    posegraph = commands.add_parser("posegraph", help="optimise a g2o pose graph (sparse LM)")
+    posegraph.add_argument("file", help="EDGE_SE2/VERTEX_SE2 graph, .g2o or .g2o.gz")
+    posegraph.add_argument("--out", help="write the optimised graph here (.g2o or .g2o.gz)")
+    posegraph.add_argument("--robust", choices=["huber", "cauchy"], help="robust kernel")
+    posegraph.add_argument("--initial", choices=["lago", "given"], default="lago",
+                           help="start from LAGO's estimate (default) or the file's poses")
+    posegraph.add_argument("--max-iterations", type=int, default=100)
+    posegraph.add_argument("--progress", action="store_true", help="show a progress bar")
     commands.add_parser("course", help="build the student notebooks: course build [--check]",
                         add_help=False)
     return parser
@@ -78,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
         return _course(argv[1:])
     args = parser.parse_args(argv)
     try:
-        return {"demo": _demo, "bench": _bench}[args.command](args)
+        return {"demo": _demo, "bench": _bench, "posegraph": _posegraph}[args.command](args)
     except ValueError as exc:
         parser.exit(2, f"abcwc {args.command}: {exc}\n")
     return 1

@@ -145,6 +145,7 @@ def read_g2o(path: str | Path) -> PoseGraph:
     edge_values: list[list[float]] = []
     edge_lines: list[int] = []
     fixed_ids: list[tuple[int, int]] = []
+    number = 0
     try:
         with _open_text(path) as text:
             for number, line in enumerate(text, start=1):
@@ -180,7 +181,8 @@ def read_g2o(path: str | Path) -> PoseGraph:
     except FileNotFoundError:
         raise GraphFileError(f"{path}: no such file") from None
     except (UnicodeDecodeError, EOFError, gzip.BadGzipFile, OSError) as exc:
-        raise GraphFileError(f"{path}: not a readable g2o text file ({exc})") from None
+        raise GraphFileError(f"{path}, after line {number}: not a readable g2o text file "
+                             f"({exc})") from None
     if not edge_ids:
         raise GraphFileError(f"{path}: no EDGE_SE2 records")
     values = np.array(edge_values)

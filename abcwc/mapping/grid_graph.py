@@ -2,8 +2,9 @@
 
 In the spirit of Olson, Leonard and Teller's Manhattan world ("Fast iterative alignment
 of pose graphs with poor initial estimates", ICRA 2006; the M3500 data set): a robot
-drives one block (``step`` m) at a time, turning left or right or keeping on at each
-crossing. Consecutive poses get an odometry edge; whenever the robot is back at a
+drives one block (``step`` m) at a time in a square city of about ``poses / 4``
+crossings, turning left or right or keeping on at each crossing (and away from the
+city's edge). Consecutive poses get an odometry edge; whenever the robot is back at a
 crossing it passed before (at least ``min_gap`` poses ago), it gets loop-closure edges
 to up to ``loops_per_pose`` of those earlier visits. Every measurement is the true
 relative pose perturbed by zero-mean Gaussian noise of standard deviations ``sigma``
@@ -61,15 +62,23 @@ def grid_world(poses: int, seed: int, loops_per_pose: int = 1, step: float = 1.0
     if len(sigma) != 3 or not all(math.isfinite(s) and s > 0 for s in sigma):
         raise ValueError(f"sigma must be three finite standard deviations > 0, got {sigma!r}")
     rng = np.random.default_rng(seed)
-    turns = rng.choice([-1, 0, 0, 1], size=poses) * (math.pi / 2)  # keep on half the time
-    heading = np.cumsum(np.r_[0.0, turns[1:]])
-    cells = np.cumsum(np.column_stack([np.round(np.cos(heading)), np.round(np.sin(heading))]),
-                      axis=0) - [1.0, 0.0]  # pose 0 at the origin
-    truth = np.column_stack([cells * step, wrap_angle(heading)])
+    half = max(2, round(math.sqrt(poses) / 4))   # the city: crossings -half..half each way
+    moves = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]])  # heading 0, 1, 2, 3 quarter turns
+    cells = np.zeros((poses, 2), dtype=np.int64)
+    quarters = np.zeros(poses, dtype=np.int64)
+    wishes = rng.choice([-1, 0, 0, 1], size=poses)      # keep on half the time
+    for k in range(1, poses):  # a walk: each crossing depends on the one before
+        for turn in (wishes[k], 1, -1, 2):               # turn away from the city's edge
+            heading = (quarters[k - 1] + turn) % 4
+            cell = cells[k - 1] + moves[heading]
+            if np.all(np.abs(cell) <= half):
+                break
+        cells[k], quarters[k] = cell, heading
+    truth = np.column_stack([cells * step, wrap_angle(quarters * (math.pi / 2))])
 
     pairs = [(k, k + 1) for k in range(poses - 1)]
     visits: dict[tuple[int, int], list[int]] = {}
-    for k, cell in enumerate(map(tuple, cells.astype(int).tolist())):
+    for k, cell in enumerate(map(tuple, cells.tolist())):
         earlier = [v for v in visits.get(cell, []) if k - v >= min_gap]
         if earlier and loops_per_pose:
             chosen = rng.choice(earlier, size=min(loops_per_pose, len(earlier)), replace=False)

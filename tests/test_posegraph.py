@@ -266,3 +266,13 @@ def test_cli_bad_file_one_line_and_status_2(tmp_path):
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.splitlines() == [f"abcwc: error: {bad}, line 2: EDGE_SE2 has 11 "
                                         "fields, expected 12"]
+
+
+def test_graph_in_pieces_refused():
+    z = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    pieces = PoseGraph(np.arange(4), np.zeros((4, 3)), np.array([[0, 1], [2, 3]]), z,
+                       np.broadcast_to(np.eye(3), (2, 3, 3)).copy())
+    with pytest.raises(ValueError, match="2 pose.*vertex 2: the graph must be connected"):
+        optimise(pieces)
+    _, result = optimise(replace(pieces, fixed=np.array([0, 2])))
+    assert result.chi2_final < 1e-20

@@ -11,8 +11,8 @@ with ``z_k`` the measured pose of ``j`` seen from ``i``, ``I_k`` its information
 and ``Log`` SE(2)'s logarithm: the angle ``wrap(theta_j - theta_i - theta_z)`` and the
 translation ``V(theta)^-1 t`` of the residual pose, ``V^-1 = [[a, theta/2], [-theta/2,
 a]]``, ``a = (theta/2) cot(theta/2)`` (Eade, "Lie groups for 2D and 3D transformations",
-2017, sec. 3). This is GTSAM's ``BetweenFactor<Pose2>`` error, so the chi2 computed
-here is the figure GTSAM reports (times 2: GTSAM prints half of it).
+2017, sec. 3). This is GTSAM's ``BetweenFactor<Pose2>`` error (GTSAM's graph error is
+half this chi2), so the figures here compare with GTSAM's one for one.
 
 The solver linearises in the plain coordinates ``(x, y, theta)`` of every free pose
 (updates add, angles wrap), with analytic Jacobians from the chain rule through ``Log``
@@ -56,6 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.sparse.csgraph import connected_components
 
 from abcwc.geometry import relative, wrap_angle
 from abcwc.mapping.g2o import PoseGraph
@@ -70,7 +71,8 @@ INITIAL_DAMPING = 1e-10
 nearly Gauss-Newton, like GTSAM's default lambda = 1e-5 for information of this size."""
 
 Progress = Callable[[int, float, float], None]
-"""Called after every accepted step with (iteration, chi2, lambda)."""
+"""Called after every accepted step with (iteration, cost, lambda); the cost is chi2
+unless a robust kernel is on."""
 
 
 @dataclass(frozen=True)
@@ -296,6 +298,20 @@ def _check_options(graph: PoseGraph, robust: str | None, robust_width: float,
         raise ValueError(f"initial {initial!r} unknown; allowed: {', '.join(INITIALISATIONS)}")
     if not np.all(np.isfinite(graph.poses)):
         raise ValueError("the graph's initial poses must be finite")
+    _check_anchored(graph)
+
+
+def _check_anchored(graph: PoseGraph) -> None:
+    """ValueError unless every pose is joined by edges to a fixed pose (else H is
+    singular: nothing says where the unjoined poses are)."""
+    n = len(graph.ids)
+    fixed = graph.fixed if len(graph.fixed) else np.array([0])
+    adjacency = sp.coo_matrix((np.ones(len(graph.edges)), (graph.i, graph.j)), shape=(n, n))
+    _, component = connected_components(adjacency, directed=False)
+    loose = np.nonzero(~np.isin(component, component[fixed]))[0]
+    if len(loose):
+        raise ValueError(f"{len(loose)} pose(s) not joined by edges to a fixed pose, "
+                         f"e.g. vertex {graph.ids[loose[0]]}: the graph must be connected")
 
 
 def optimise(graph: PoseGraph, *, robust: str | None = None,

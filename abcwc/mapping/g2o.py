@@ -45,6 +45,8 @@ from abcwc.geometry import wrap_angle
 GZIP_MAGIC = b"\x1f\x8b"
 UPPER_TRIANGLE = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 """Row and column of I11 I12 I13 I22 I23 I33, the order the file gives them in."""
+FIELD_COUNTS = {"VERTEX_SE2": 5, "EDGE_SE2": 12}
+"""Fields on a line of each record, its tag included."""
 
 
 class GraphFileError(ValueError):
@@ -130,7 +132,61 @@ def _vertex_id(text: str, where: str) -> int:
         raise GraphFileError(f"{where}: vertex id must be an integer, got {text!r}") from None
 
 
-FIELD_COUNTS = {"VERTEX_SE2": 5, "EDGE_SE2": 12}
+@dataclass
+class _Records:
+    """What the lines of a g2o file said, with the line each record came from."""
+
+    vertices: dict[int, tuple[list[float], int]] = field(default_factory=dict)
+    edge_ids: list[tuple[int, int]] = field(default_factory=list)
+    edge_values: list[list[float]] = field(default_factory=list)
+    edge_lines: list[int] = field(default_factory=list)
+    fixed_ids: list[tuple[int, int]] = field(default_factory=list)
+
+    def add(self, fields: list[str], where: str, number: int) -> None:
+        """Take one non-blank, non-comment line's fields; GraphFileError if bad."""
+        tag = fields[0]
+        if tag == "FIX":
+            if len(fields) < 2:
+                raise GraphFileError(f"{where}: FIX names no vertex")
+            self.fixed_ids += [(_vertex_id(f, where), number) for f in fields[1:]]
+            return
+        if tag not in FIELD_COUNTS:
+            raise GraphFileError(f"{where}: unsupported record {tag!r}; a planar pose "
+                                 f"graph has only VERTEX_SE2, EDGE_SE2 and FIX")
+        if len(fields) != FIELD_COUNTS[tag]:
+            raise GraphFileError(f"{where}: {tag} has {len(fields)} fields, "
+                                 f"expected {FIELD_COUNTS[tag]}")
+        if tag == "VERTEX_SE2":
+            vertex = _vertex_id(fields[1], where)
+            if vertex in self.vertices:
+                raise GraphFileError(f"{where}: vertex {vertex} defined twice "
+                                     f"(first on line {self.vertices[vertex][1]})")
+            self.vertices[vertex] = (_numbers(fields[2:5], where), number)
+            return
+        a, b = _vertex_id(fields[1], where), _vertex_id(fields[2], where)
+        if a == b:
+            raise GraphFileError(f"{where}: edge joins vertex {a} to itself")
+        self.edge_ids.append((a, b))
+        self.edge_values.append(_numbers(fields[3:12], where))
+        self.edge_lines.append(number)
+
+
+def _read_records(path: Path) -> _Records:
+    """Every record of the file, in order; GraphFileError naming the file and line."""
+    records = _Records()
+    number = 0
+    try:
+        with _open_text(path) as text:
+            for number, line in enumerate(text, start=1):
+                fields = line.split()
+                if fields and not fields[0].startswith("#"):
+                    records.add(fields, f"{path}, line {number}", number)
+    except FileNotFoundError:
+        raise GraphFileError(f"{path}: no such file") from None
+    except (UnicodeDecodeError, EOFError, gzip.BadGzipFile, OSError) as exc:
+        raise GraphFileError(f"{path}, after line {number}: not a readable g2o text file "
+                             f"({exc})") from None
+    return records
 
 
 def read_g2o(path: str | Path) -> PoseGraph:
@@ -140,54 +196,13 @@ def read_g2o(path: str | Path) -> PoseGraph:
     file that is missing or not a valid ``VERTEX_SE2``/``EDGE_SE2``/``FIX`` graph.
     """
     path = Path(path)
-    vertices: dict[int, tuple[list[float], int]] = {}
-    edge_ids: list[tuple[int, int]] = []
-    edge_values: list[list[float]] = []
-    edge_lines: list[int] = []
-    fixed_ids: list[tuple[int, int]] = []
-    number = 0
-    try:
-        with _open_text(path) as text:
-            for number, line in enumerate(text, start=1):
-                fields = line.split()
-                if not fields or fields[0].startswith("#"):
-                    continue
-                where = f"{path}, line {number}"
-                tag = fields[0]
-                if tag == "FIX":
-                    if len(fields) < 2:
-                        raise GraphFileError(f"{where}: FIX names no vertex")
-                    fixed_ids += [(_vertex_id(f, where), number) for f in fields[1:]]
-                    continue
-                if tag not in FIELD_COUNTS:
-                    raise GraphFileError(f"{where}: unsupported record {tag!r}; a planar pose "
-                                         f"graph has only VERTEX_SE2, EDGE_SE2 and FIX")
-                if len(fields) != FIELD_COUNTS[tag]:
-                    raise GraphFileError(f"{where}: {tag} has {len(fields)} fields, "
-                                         f"expected {FIELD_COUNTS[tag]}")
-                if tag == "VERTEX_SE2":
-                    vertex = _vertex_id(fields[1], where)
-                    if vertex in vertices:
-                        raise GraphFileError(f"{where}: vertex {vertex} defined twice "
-                                             f"(first on line {vertices[vertex][1]})")
-                    vertices[vertex] = (_numbers(fields[2:5], where), number)
-                else:
-                    a, b = _vertex_id(fields[1], where), _vertex_id(fields[2], where)
-                    if a == b:
-                        raise GraphFileError(f"{where}: edge joins vertex {a} to itself")
-                    edge_ids.append((a, b))
-                    edge_values.append(_numbers(fields[3:12], where))
-                    edge_lines.append(number)
-    except FileNotFoundError:
-        raise GraphFileError(f"{path}: no such file") from None
-    except (UnicodeDecodeError, EOFError, gzip.BadGzipFile, OSError) as exc:
-        raise GraphFileError(f"{path}, after line {number}: not a readable g2o text file "
-                             f"({exc})") from None
-    if not edge_ids:
+    records = _read_records(path)
+    vertices, edge_lines = records.vertices, records.edge_lines
+    if not records.edge_ids:
         raise GraphFileError(f"{path}: no EDGE_SE2 records")
-    values = np.array(edge_values)
+    values = np.array(records.edge_values)
     information = _information(values[:, 3:], path, edge_lines)
-    ids_of_edges = np.array(edge_ids, dtype=np.int64)
+    ids_of_edges = np.array(records.edge_ids, dtype=np.int64)
     if vertices:
         ids = np.array(sorted(vertices), dtype=np.int64)
         rows = np.searchsorted(ids, ids_of_edges).clip(0, len(ids) - 1)
@@ -205,7 +220,7 @@ def read_g2o(path: str | Path) -> PoseGraph:
         poses = chain_odometry(ids, rows, values[:, :3], path)
         poses_from = "odometry"
     fixed = []
-    for vertex, number in fixed_ids:
+    for vertex, number in records.fixed_ids:
         row = int(np.searchsorted(ids, vertex))
         if row >= len(ids) or ids[row] != vertex:
             raise GraphFileError(f"{path}, line {number}: FIX names unknown vertex {vertex}")

@@ -106,6 +106,33 @@ def bench_grid() -> dict[str, float]:
     }
 
 
+@benchmark("posegraph", "pose-graph LM: the shared SLAM graphs (chi2, s) and a 10,000-pose "
+           "simulated graph")
+def bench_posegraph() -> dict[str, float]:
+    import sys
+
+    from abcwc.mapping.g2o import read_g2o
+    from abcwc.mapping.grid_graph import grid_world
+    from abcwc.mapping.posegraph import optimise
+    from abcwc.mapping.slam_data import REFERENCE_GRAPHS, SLAM_DATA_ENV, slam_data_dir
+
+    figures: dict[str, float] = {}
+    folder = slam_data_dir()
+    if folder.is_dir():
+        for name, reference in REFERENCE_GRAPHS.items():
+            _, result = optimise(read_g2o(folder / reference.file))
+            figures[f"{name}: chi2 (GTSAM {reference.chi2_gtsam:g})"] = result.chi2_final
+            figures[f"{name}: seconds (GTSAM {reference.seconds_gtsam:g})"] = result.seconds
+    else:
+        print(f"posegraph: shared graphs skipped, no folder {folder} (set {SLAM_DATA_ENV})",
+              file=sys.stderr)
+    simulated = grid_world(10_000, seed=1, loops_per_pose=2)
+    _, result = optimise(simulated.graph)
+    figures["simulated 10,000 poses: edges"] = len(simulated.graph.edges)
+    figures["simulated 10,000 poses: seconds"] = result.seconds
+    return figures
+
+
 _NOTEBOOK_RUNNER = """
 import resource, sys, time
 import nbformat

@@ -1,4 +1,4 @@
-"""The ``abcwc`` command: ``demo``, ``bench`` and ``course build``.
+"""The ``abcwc`` command: ``demo``, ``bench``, ``posegraph`` and ``course build``.
 
 A mistake in what the user gave (an unknown world or benchmark, a bad number, a missing
 data folder, ``course build`` outside a checkout, ...) ends the command with one line
@@ -55,6 +55,23 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _posegraph(args: argparse.Namespace) -> int:
+    """Optimise a g2o pose graph and print chi2 before and after, iterations and time."""
+    from abcwc.mapping.g2o import read_g2o, write_g2o
+    from abcwc.mapping.posegraph import optimise
+
+    graph = read_g2o(args.file)
+    poses, result = optimise(graph, robust=args.robust, initial=args.initial,
+                             max_iterations=args.max_iterations, progress=args.progress)
+    if args.out:
+        write_g2o(graph.with_poses(poses), args.out)
+    print(f"chi2 initial {result.chi2_initial:.6g} final {result.chi2_final:.6g}, "
+          f"{result.iterations} iterations, {result.seconds:.3f} s ({result.reason})")
+    if args.out:
+        print(f"wrote {args.out}")
+    return 0
+
+
 def _course_build(args: argparse.Namespace) -> int:
     from abcwc import course
 
@@ -92,6 +109,16 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("--course", metavar="DIR",
                        help="student notebooks to write (default: course)")
     build.set_defaults(run=_course_build)
+
+    posegraph = commands.add_parser("posegraph", help="optimise a g2o pose graph (sparse LM)")
+    posegraph.add_argument("file", help="EDGE_SE2/VERTEX_SE2 graph, .g2o or .g2o.gz")
+    posegraph.add_argument("--out", help="write the optimised graph here (.g2o or .g2o.gz)")
+    posegraph.add_argument("--robust", choices=["huber", "cauchy"], help="robust kernel")
+    posegraph.add_argument("--initial", choices=["lago", "given"], default="lago",
+                           help="start from LAGO's estimate (default) or the file's poses")
+    posegraph.add_argument("--max-iterations", type=int, default=100)
+    posegraph.add_argument("--progress", action="store_true", help="show a progress bar")
+    posegraph.set_defaults(run=_posegraph)
     return parser
 
 

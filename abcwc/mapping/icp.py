@@ -7,10 +7,11 @@ squared distance to the line through ``q_i`` with normal ``n_i``::
 
     E(x) = sum_i (n_i . (R(theta) p_i + t - q_i))^2
 
-The normals come from each target point's ``normal_neighbours`` nearest neighbours: the
-direction of least spread of their 2x2 scatter matrix (total least squares). Target
-points whose neighbourhood is not line-like (corners, clutter) have no normal and take
-no part. Each iteration minimises E linearised for a small correction ``(dx, dy, dtheta)``
+The normals come from each target point and its nearest neighbours (3 in all by
+default): the direction of least spread of their 2x2 scatter matrix (total least
+squares). Target points whose neighbourhood is not line-like (corners, clutter) or
+spreads over more than ``normal_max_spread`` (m: a gap, not a surface) have no normal
+and take no part. Each iteration minimises E linearised for a small correction ``(dx, dy, dtheta)``
 applied on top of the current pose (the small-angle linearisation of Low, "Linear
 least-squares optimization for point-to-plane ICP surface registration", UNC TR04-004,
 2004, in 2D): ``R(dtheta) p' ~ p' + dtheta (-p'_y, p'_x)``, so each residual is linear
@@ -53,6 +54,10 @@ fraction of the large one (an even spread along a segment gives 0, a disc 1)."""
 _EIGENVALUE_FLOOR = 1e-9
 
 
+class TooFewPairsError(ValueError):
+    """ICP found fewer than 3 usable point pairs (points too sparse, or too far apart)."""
+
+
 @dataclass(frozen=True)
 class IcpResult:
     """What ICP found.
@@ -72,17 +77,19 @@ class IcpResult:
     converged: bool
 
 
-def line_normals(points: np.ndarray, neighbours: int = 5) -> np.ndarray:
+def line_normals(points: np.ndarray, neighbours: int = 3,
+                 max_spread: float = np.inf) -> np.ndarray:
     """Unit normals ``(N, 2)`` of each point's neighbourhood; NaN where not line-like.
 
-    The neighbourhood is the point and its ``neighbours - 1`` nearest others; its normal
+    The neighbourhood is the point and its ``neighbours - 1`` nearest others, all
+    within ``max_spread`` (m) of it, or the point has no normal; its normal
     is the scatter matrix's eigenvector of least spread, from the closed form of a
     symmetric 2x2 eigenproblem (vectorised over all points).
     """
     points = _as_points(points, "points")
     if len(points) < neighbours:
         return np.full(points.shape, np.nan)
-    _, near = cKDTree(points).query(points, k=neighbours)
+    distance, near = cKDTree(points).query(points, k=neighbours)
     group = points[near]  # (N, k, 2)
     centred = group - group.mean(axis=1, keepdims=True)
     sxx = np.mean(centred[..., 0] ** 2, axis=1)
@@ -92,7 +99,8 @@ def line_normals(points: np.ndarray, neighbours: int = 5) -> np.ndarray:
     large, small = (sxx + syy) / 2 + half_gap, (sxx + syy) / 2 - half_gap
     along = 0.5 * np.arctan2(2 * sxy, sxx - syy)  # direction of most spread
     normals = np.stack([-np.sin(along), np.cos(along)], axis=-1)
-    normals[~(small <= LINE_LIKE * large) | ~(large > 0)] = np.nan
+    line_like = (small <= LINE_LIKE * large) & (large > 0) & (distance[:, -1] <= max_spread)
+    normals[~line_like] = np.nan
     return normals
 
 
@@ -100,12 +108,12 @@ def icp(source: np.ndarray, target: np.ndarray,
         initial: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0), *,
         max_correspondence_distance: float = 0.5, trim_fraction: float = 0.9,
         max_iterations: int = 50, tolerance: float = 1e-6,
-        normal_neighbours: int = 5) -> IcpResult:
+        normal_neighbours: int = 3, normal_max_spread: float = 0.5) -> IcpResult:
     """Point-to-line ICP of ``source`` ``(N, 2)`` onto ``target`` ``(M, 2)`` (m).
 
     ``initial``: the first guess of the source frame's pose in the target frame. See the
     module docstring for the method. Raises ValueError for bad shapes or settings, and
-    when fewer than 3 pairs survive the outlier rejection.
+    TooFewPairsError (a ValueError) when fewer than 3 pairs survive the outlier rejection.
     """
     source, target = _as_points(source, "source"), _as_points(target, "target")
     if not max_correspondence_distance > 0:
@@ -115,11 +123,11 @@ def icp(source: np.ndarray, target: np.ndarray,
         raise ValueError(f"trim_fraction {trim_fraction!r} outside (0, 1]")
     if not (isinstance(max_iterations, int) and max_iterations >= 1):
         raise ValueError(f"max_iterations must be an integer >= 1, got {max_iterations!r}")
-    normals = line_normals(target, normal_neighbours)
+    normals = line_normals(target, normal_neighbours, normal_max_spread)
     has_normal = np.all(np.isfinite(normals), axis=1)
     target, normals = target[has_normal], normals[has_normal]
     if len(target) < 3:
-        raise ValueError(f"the target has {len(target)} points with a line-like "
+        raise TooFewPairsError(f"the target has {len(target)} points with a line-like "
                          f"neighbourhood; ICP needs at least 3")
     tree = cKDTree(target)
     pose = np.asarray(initial, dtype=float).reshape(3).copy()
@@ -161,7 +169,7 @@ def _pairs(tree: cKDTree, target: np.ndarray, normals: np.ndarray, source: np.nd
         best = np.argpartition(np.abs(residuals), keep - 1)[:keep]
         moved, n, residuals = moved[best], n[best], residuals[best]
     if len(residuals) < 3:
-        raise ValueError(f"only {len(residuals)} point pairs within "
+        raise TooFewPairsError(f"only {len(residuals)} point pairs within "
                          f"{max_distance} m; ICP needs at least 3 (is the initial guess "
                          f"too far off?)")
     turn = n[:, 1] * moved[:, 0] - n[:, 0] * moved[:, 1]  # n . (-p'_y, p'_x)
@@ -202,6 +210,7 @@ def match_consecutive_scans(log: CarmenLog, first: int = 0, last: int | None = N
 
     Each pair is matched by :func:`icp`, starting from the odometry's relative pose, in
     the laser frame, then moved to the robot frame: ``offset (+) delta (+) offset^-1``.
+    A pair ICP cannot match (fewer than 3 point pairs) keeps the odometry's pose.
     """
     last = len(log) - 1 if last is None else last
     if not 0 <= first <= last < len(log):
@@ -212,7 +221,10 @@ def match_consecutive_scans(log: CarmenLog, first: int = 0, last: int | None = N
     deltas = np.empty((last - first, 3))
     for k in range(first, last):
         current = log.points(k + 1)
-        deltas[k - first] = icp(current, previous, guesses[k - first], **options).pose
+        try:
+            deltas[k - first] = icp(current, previous, guesses[k - first], **options).pose
+        except TooFewPairsError:
+            deltas[k - first] = guesses[k - first]
         previous = current
     offset = log.laser_offset
     return np.asarray(compose(compose(offset, deltas), inverse(offset)))

@@ -81,6 +81,22 @@ def test_corridor_covariance_is_long_along_the_corridor():
     assert values[-1] > 10 * room_values[-1]
 
 
+def test_a_prior_on_the_guess_holds_the_corridor_direction():
+    rng = np.random.default_rng(8)
+    walls = [(-10, -1, 10, -1), (10, 1, -10, 1)]
+    target = segment_points(walls, 0.05) + rng.normal(0, 0.005, (800, 2))
+    source = segment_points(walls, 0.05, phase=0.5) + rng.normal(0, 0.005, (800, 2))
+    guess = (0.3, 0.05, 0.01)
+    result = icp(source, target, guess, initial_sigma=(0.1, 0.1, 0.1),
+                 residual_sigma=0.005)
+    assert abs(result.pose[0] - 0.3) < 0.05  # along the corridor: the guess stays
+    assert abs(result.pose[1]) < 0.002 and abs(result.pose[2]) < 0.001  # across: the walls
+    free = icp(source, target, guess)
+    assert result.covariance[0, 0] < free.covariance[0, 0]  # the prior adds information
+    with pytest.raises(ValueError, match="initial_sigma must be three finite numbers > 0"):
+        icp(source, target, guess, initial_sigma=(0.1, 0.0, 0.1))
+
+
 def test_line_normals_are_perpendicular_to_walls():
     points = segment_points([(0, 0, 4, 0), (4, 0, 4, 3)], 0.1)
     normals = line_normals(points)

@@ -9,8 +9,9 @@ the front laser's offset, other message types) is skipped:
 * ``FLASER n r_1 .. r_n x y theta odom_x odom_y odom_theta timestamp host logger_ts``:
   an old-style front-laser scan. Its beams span 180 degrees in front of the robot, beam
   ``i`` at ``-pi/2 + i pi / (n - 1)``; ``odom_*`` is the robot's odometry pose at the
-  scan. The line says nothing of the laser's maximum range or mounting: pass
-  ``max_range`` and ``laser_offset`` (or log the ``robot_frontlaser_offset`` PARAMs).
+  scan (the first pose, the laser's as the logging program saw it, is not used). The
+  line says nothing of the laser's maximum range or mounting: pass ``max_range`` and
+  ``laser_offset`` (or log the ``robot_frontlaser_offset`` PARAMs).
 * ``ROBOTLASER1 laser_type start_angle fov angular_res max_range accuracy remission_mode
   n r_1 .. r_n m e_1 .. e_m laser_x laser_y laser_theta robot_x robot_y robot_theta tv
   rv forward_safety side_safety turn_axis timestamp host logger_timestamp``: a scan with
@@ -56,8 +57,9 @@ class CarmenLog:
     refer to); ``odometry`` the robot's ``(x, y, theta)`` at each scan (m, rad);
     ``laser_offset`` the laser's pose on the robot ``(x, y, theta)``; ``angle_min`` and
     ``angle_increment`` (rad) each scan's first beam and beam spacing; ``range_max`` (m)
-    each scan's maximum range; ``ranges`` the masked ``(N, B)`` readings (m).
-    ``odom_stamps`` and ``odom_poses`` are the log's ODOM lines (empty if it has none).
+    each scan's maximum range; ``beams`` each scan's number of readings; ``ranges`` the
+    masked ``(N, B)`` readings (m), ``B = max(beams)``. ``odom_stamps`` and
+    ``odom_poses`` are the log's ODOM lines (empty if it has none).
     """
 
     path: Path
@@ -68,6 +70,7 @@ class CarmenLog:
     angle_min: np.ndarray
     angle_increment: np.ndarray
     range_max: np.ndarray
+    beams: np.ndarray
     ranges: np.ma.MaskedArray
     odom_stamps: np.ndarray
     odom_poses: np.ndarray
@@ -98,21 +101,17 @@ class CarmenLog:
         if frame == "base":
             return transform_points(self.laser_offset, xy)
         if frame == "odom":
-            return transform_points(self.laser_poses[index], xy)
+            return transform_points(compose(self.odometry[index], self.laser_offset), xy)
         raise ValueError(f"frame {frame!r} is not one of 'laser', 'base', 'odom'")
 
     def scan(self, index: int) -> LaserScan:
         """Scan ``index`` as a LaserScan: masked readings become ``inf``, padding is cut."""
-        count = int(np.count_nonzero(self._beam_counts()[index]))
-        ranges = self.ranges.filled(np.inf)[index, :count].astype(float)
+        count = int(self.beams[index])
+        ranges = self.ranges[index, :count].filled(np.inf).astype(float)
         return LaserScan(angle_min=float(self.angle_min[index]),
                          angle_increment=float(self.angle_increment[index]),
                          range_min=0.0, range_max=float(self.range_max[index]),
                          ranges=ranges, stamp=float(self.stamps[index]))
-
-    def _beam_counts(self) -> np.ndarray:
-        """``(N, B)`` True for the beams a scan really has (False for padding)."""
-        return ~np.isnan(self.ranges.data)
 
 
 def read_carmen_log(path: str | Path, *, max_range: float | None = None,
@@ -155,7 +154,8 @@ def read_carmen_log(path: str | Path, *, max_range: float | None = None,
             param_offset[_OFFSET_PARAMS[fields[1]]] = _number(path, number, fields[2])
     if not scans.numbers:
         raise ValueError(f"{path}: no {laser_message} lines (no laser scans)")
-    stamps, odometry, logged_offset, angle_min, increment, range_max, ranges = scans.arrays()
+    (stamps, odometry, logged_offset, angle_min, increment, range_max, beams,
+     ranges) = scans.arrays()
     if max_range is not None:
         range_max = np.minimum(range_max, max_range)
     if laser_offset is not None:
@@ -166,12 +166,12 @@ def read_carmen_log(path: str | Path, *, max_range: float | None = None,
         offset = logged_offset
     else:
         offset = param_offset
-    invalid = (np.isnan(ranges) | ~np.isfinite(ranges) | (ranges <= 0.0)
+    invalid = (~np.isfinite(ranges) | (ranges <= 0.0)
                | (ranges >= NO_RETURN_RANGE) | (ranges >= range_max[:, None]))
     odom_stamps, odom_poses = odom.arrays()
     return CarmenLog(path=path, laser_message=laser_message, stamps=stamps,
                      odometry=odometry, laser_offset=offset, angle_min=angle_min,
-                     angle_increment=increment, range_max=range_max,
+                     angle_increment=increment, range_max=range_max, beams=beams,
                      ranges=np.ma.MaskedArray(ranges, mask=invalid),
                      odom_stamps=odom_stamps, odom_poses=odom_poses)
 
@@ -276,7 +276,7 @@ class _ScanLines:
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         """stamps, odometry, logged laser offset (or None), angle_min, angle_increment,
-        range_max and NaN-padded ranges."""
+        range_max, beam counts and NaN-padded ranges."""
         rows = _to_floats(self.path, self.numbers, self.tokens)
         counts = np.array([len(row) - 7 for row in rows])
         if np.all(counts == counts[0]):
@@ -294,13 +294,13 @@ class _ScanLines:
             angle_min = np.full(len(rows), -np.pi / 2)
             increment = np.pi / np.maximum(counts - 1, 1)
             range_max = np.full(len(rows), NO_RETURN_RANGE)
-            return stamps, odometry, None, angle_min, increment, range_max, ranges
+            return stamps, odometry, None, angle_min, increment, range_max, counts, ranges
         geometry = _to_floats(self.path, self.numbers, [list(g) for g in self.geometry])
         angle_min, increment, range_max = np.stack(geometry).T
         offsets = np.asarray(relative(odometry, laser_poses))
         offset = np.median(offsets, axis=0)
         offset[2] = wrap_angle(float(offset[2]))
-        return stamps, odometry, offset, angle_min, increment, range_max, ranges
+        return stamps, odometry, offset, angle_min, increment, range_max, counts, ranges
 
 
 class _OdomLines:

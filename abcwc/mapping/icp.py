@@ -37,12 +37,12 @@ zero; they are floored at ``1e-9`` of the largest, which leaves a huge, finite v
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from abcwc.geometry import compose, inverse, relative, transform_points
+from abcwc.geometry import compose, inverse, relative, transform_points, wrap_angle
 from abcwc.types import LaserScan
 
 if TYPE_CHECKING:
@@ -108,11 +108,17 @@ def icp(source: np.ndarray, target: np.ndarray,
         initial: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0), *,
         max_correspondence_distance: float = 0.5, trim_fraction: float = 0.9,
         max_iterations: int = 50, tolerance: float = 1e-6,
-        normal_neighbours: int = 3, normal_max_spread: float = 0.5) -> IcpResult:
+        normal_neighbours: int = 3, normal_max_spread: float = 0.5,
+        initial_sigma: tuple[float, float, float] | None = None,
+        residual_sigma: float = 0.02) -> IcpResult:
     """Point-to-line ICP of ``source`` ``(N, 2)`` onto ``target`` ``(M, 2)`` (m).
 
-    ``initial``: the first guess of the source frame's pose in the target frame. See the
-    module docstring for the method. Raises ValueError for bad shapes or settings, and
+    ``initial``: the first guess of the source frame's pose in the target frame. With
+    ``initial_sigma`` (standard deviations of the guess: m, m, rad) the guess is also a
+    Gaussian prior on the pose, weighed against point-to-line residuals of standard
+    deviation ``residual_sigma`` (m): what the points fix they decide, and along what
+    they cannot fix (a corridor) the guess stays. See the module docstring for the
+    method. Raises ValueError for bad shapes or settings, and
     TooFewPairsError (a ValueError) when fewer than 3 pairs survive the outlier rejection.
     """
     source, target = _as_points(source, "source"), _as_points(target, "target")
@@ -130,21 +136,48 @@ def icp(source: np.ndarray, target: np.ndarray,
         raise TooFewPairsError(f"the target has {len(target)} points with a line-like "
                          f"neighbourhood; ICP needs at least 3")
     tree = cKDTree(target)
-    pose = np.asarray(initial, dtype=float).reshape(3).copy()
+    guess = np.asarray(initial, dtype=float).reshape(3)
+    prior = None if initial_sigma is None else residual_sigma / _positive(initial_sigma)
+    pose = guess.copy()
     converged, iterations = False, 0
     while not converged and iterations < max_iterations:
         iterations += 1
-        moved, jacobian, residuals = _pairs(tree, target, normals, source, pose,
-                                            max_correspondence_distance, trim_fraction)
-        step = np.linalg.lstsq(jacobian, -residuals, rcond=None)[0]
+        jacobian, residuals = _pairs(tree, target, normals, source, pose,
+                                     max_correspondence_distance, trim_fraction)
+        rows, values = _with_prior(jacobian, residuals, pose, guess, prior)
+        step = np.linalg.lstsq(rows, -values, rcond=None)[0]
         pose = np.asarray(compose(step, pose))
         converged = bool(np.all(np.abs(step) < tolerance))
-    moved, jacobian, residuals = _pairs(tree, target, normals, source, pose,
-                                        max_correspondence_distance, trim_fraction)
-    return IcpResult(pose=pose, covariance=_covariance(jacobian, residuals),
+    jacobian, residuals = _pairs(tree, target, normals, source, pose,
+                                 max_correspondence_distance, trim_fraction)
+    rows, _ = _with_prior(jacobian, residuals, pose, guess, prior)
+    return IcpResult(pose=pose, covariance=_covariance(rows, residuals),
                      fitness=len(residuals) / len(source),
                      rms=float(np.sqrt(np.mean(residuals ** 2))),
                      iterations=iterations, converged=converged)
+
+
+def _positive(sigma: tuple[float, float, float]) -> np.ndarray:
+    values = np.asarray(sigma, dtype=float)
+    if values.shape != (3,) or not np.all(values > 0) or not np.all(np.isfinite(values)):
+        raise ValueError(f"initial_sigma must be three finite numbers > 0 (m, m, rad), "
+                         f"got {sigma!r}")
+    return values
+
+
+def _with_prior(jacobian: np.ndarray, residuals: np.ndarray, pose: np.ndarray,
+                guess: np.ndarray, weights: np.ndarray | None
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """The point rows, and with ``weights`` three more: ``weights * (pose - guess)``,
+    linearised for a correction composed on the left of ``pose``."""
+    if weights is None:
+        return jacobian, residuals
+    deviation = pose - guess
+    deviation[2] = wrap_angle(float(deviation[2]))
+    # d(step (+) pose) / d(step) at step = 0
+    moves = np.array([[1.0, 0.0, -pose[1]], [0.0, 1.0, pose[0]], [0.0, 0.0, 1.0]])
+    return (np.vstack([jacobian, weights[:, None] * moves]),
+            np.concatenate([residuals, weights * deviation]))
 
 
 def _as_points(points: np.ndarray, name: str) -> np.ndarray:
@@ -156,8 +189,9 @@ def _as_points(points: np.ndarray, name: str) -> np.ndarray:
 
 def _pairs(tree: cKDTree, target: np.ndarray, normals: np.ndarray, source: np.ndarray,
            pose: np.ndarray, max_distance: float, trim_fraction: float
-           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The inlier pairs at ``pose``: moved source points, Jacobian rows and residuals."""
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """The inlier pairs at ``pose``: their Jacobian rows ``(n, 3)`` and point-to-line
+    residuals ``(n,)`` (m)."""
     moved = transform_points(pose, source)
     distance, nearest = tree.query(moved, distance_upper_bound=max_distance)
     paired = np.isfinite(distance)
@@ -173,11 +207,12 @@ def _pairs(tree: cKDTree, target: np.ndarray, normals: np.ndarray, source: np.nd
                          f"{max_distance} m; ICP needs at least 3 (is the initial guess "
                          f"too far off?)")
     turn = n[:, 1] * moved[:, 0] - n[:, 0] * moved[:, 1]  # n . (-p'_y, p'_x)
-    return moved, np.column_stack([n, turn]), residuals
+    return np.column_stack([n, turn]), residuals
 
 
 def _covariance(jacobian: np.ndarray, residuals: np.ndarray) -> np.ndarray:
-    """``s^2 (J^T J)^-1`` with near-zero eigenvalues of ``J^T J`` floored."""
+    """``s^2 (J^T J)^-1`` with near-zero eigenvalues of ``J^T J`` floored; ``s^2`` from
+    the point residuals (``jacobian`` may hold the prior's rows too)."""
     dof = max(len(residuals) - 3, 1)
     variance = float(residuals @ residuals) / dof
     values, vectors = np.linalg.eigh(jacobian.T @ jacobian)
@@ -195,7 +230,7 @@ def scan_points(scan: LaserScan) -> np.ndarray:
 
 def match_scans(reference: LaserScan, current: LaserScan,
                 initial: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0),
-                **options: float) -> IcpResult:
+                **options: Any) -> IcpResult:
     """The pose of ``current``'s laser frame in ``reference``'s, by point-to-line ICP.
 
     ``initial`` is the first guess (e.g. from odometry); ``options`` go to :func:`icp`.
@@ -204,7 +239,7 @@ def match_scans(reference: LaserScan, current: LaserScan,
 
 
 def match_consecutive_scans(log: CarmenLog, first: int = 0, last: int | None = None,
-                            **options: float) -> np.ndarray:
+                            **options: Any) -> np.ndarray:
     """Scan-matching odometry: ``(K, 3)`` relative robot poses from scan ``k`` to ``k+1``
     for ``k`` in ``first .. last - 1`` (``last`` defaults to the last scan).
 

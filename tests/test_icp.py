@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from abcwc.geometry import inverse_transform_points, relative
+from abcwc.geometry import compose, inverse_transform_points, relative
 from abcwc.mapping.carmen import read_carmen_log
 from abcwc.mapping.icp import (
     TooFewPairsError,
@@ -173,3 +173,12 @@ def test_aces_consecutive_match_is_fit_and_consistent(aces):
     assert result.converged and result.fitness > 0.75 and result.rms < 0.05
     assert np.all(np.linalg.eigvalsh(result.covariance) > 0)
     np.testing.assert_allclose(match_consecutive_scans(log, 1000, 1001)[0], result.pose)
+
+
+def test_chain_composes_relative_poses_in_turn():
+    rng = np.random.default_rng(2)
+    deltas = rng.normal(0, 1, (30, 3))
+    poses = [np.array([1.0, -2.0, 3.0])]
+    for delta in deltas:
+        poses.append(compose(poses[-1], delta))
+    np.testing.assert_allclose(chain(poses[0], deltas), poses, atol=1e-12)

@@ -27,7 +27,9 @@ decide what they can fix and odometry the rest.
 Outliers are rejected twice per iteration: pairs further apart than
 ``max_correspondence_distance`` (m), then all but the ``trim_fraction`` of pairs with the
 smallest point-to-line residuals (trimmed ICP, Chetverikov et al., ICPR 2002). Iteration
-stops when the correction is below ``tolerance`` (m and rad) or after ``max_iterations``.
+stops when the correction is below ``tolerance`` (m and rad), when the pose is back
+where it was two iterations before (the pairing flips between two sets), or after
+``max_iterations``.
 
 Covariance: the Hessian approximation (Bengtsson and Baerveldt, "Robot localization
 based on scan-matching - estimating the covariance matrix for the IDC algorithm", RAS
@@ -143,20 +145,23 @@ def icp(source: np.ndarray, target: np.ndarray,
     target, normals = target[has_normal], normals[has_normal]
     if len(target) < 3:
         raise TooFewPairsError(f"the target has {len(target)} points with a line-like "
-                         f"neighbourhood; ICP needs at least 3")
+                               f"neighbourhood; ICP needs at least 3")
     tree = cKDTree(target)
     guess = np.asarray(initial, dtype=float).reshape(3)
     prior = None if initial_sigma is None else residual_sigma / _positive(initial_sigma)
-    pose = guess.copy()
-    converged, iterations = False, 0
-    while not converged and iterations < max_iterations:
-        iterations += 1
-        jacobian, residuals = _pairs(tree, target, normals, source, pose,
+    poses = [guess.copy()]  # one per iteration
+    converged = False
+    while not converged and len(poses) <= max_iterations:
+        jacobian, residuals = _pairs(tree, target, normals, source, poses[-1],
                                      max_correspondence_distance, trim_fraction)
-        rows, values = _with_prior(jacobian, residuals, pose, guess, prior)
+        rows, values = _with_prior(jacobian, residuals, poses[-1], guess, prior)
         step = np.linalg.lstsq(rows, -values, rcond=None)[0]
-        pose = np.asarray(compose(step, pose))
-        converged = bool(np.all(np.abs(step) < tolerance))
+        poses.append(np.asarray(compose(step, poses[-1])))
+        # done when there is nothing left to correct, or when back where it was two
+        # steps ago (the pairs flip between two sets, the pose between two answers)
+        converged = _small(step, tolerance) or (
+            len(poses) > 2 and _small(np.asarray(relative(poses[-3], poses[-1])), tolerance))
+    pose, iterations = poses[-1], len(poses) - 1
     jacobian, residuals = _pairs(tree, target, normals, source, pose,
                                  max_correspondence_distance, trim_fraction)
     rows, _ = _with_prior(jacobian, residuals, pose, guess, prior)
@@ -164,6 +169,11 @@ def icp(source: np.ndarray, target: np.ndarray,
                      fitness=len(residuals) / len(source),
                      rms=float(np.sqrt(np.mean(residuals ** 2))),
                      iterations=iterations, converged=converged)
+
+
+def _small(change: np.ndarray, tolerance: float) -> bool:
+    """Whether a pose change is below ``tolerance`` in every component (m, m, rad)."""
+    return bool(np.all(np.abs(change) < tolerance))
 
 
 def _positive(sigma: tuple[float, float, float]) -> np.ndarray:

@@ -7,7 +7,7 @@ its poses in a global frame: for each reference relation ``delta*_ij`` (the pose
 ``j`` in the frame of scan ``i``, from a hand-checked alignment), the estimate's
 ``delta_ij = x_i^-1 (+) x_j`` is compared through
 
-    epsilon_ij = delta_ij (-) delta*_ij        (eqn 1 of the paper, a (-) b = b^-1 (+) a)
+    epsilon_ij = delta_ij (-) delta*_ij        (with a (-) b = b^-1 (+) a)
 
 and the paper reports, over all relations, the mean and standard deviation of the
 absolute translational error ``|trans(epsilon_ij)|`` (m) and of the absolute rotational
@@ -153,7 +153,7 @@ def relation_errors(poses: np.ndarray, relations: Relations) -> RelationErrors:
     """The relation errors of ``poses`` ``(N, 3)``, one per scan of the log (m, rad).
 
     ``epsilon = delta (-) delta*`` with ``delta = relative(poses[first], poses[second])``
-    (Kümmerle et al. 2009, eqn 1); the answer holds ``|trans(epsilon)|`` and
+    (Kümmerle et al. 2009); the answer holds ``|trans(epsilon)|`` and
     ``|rot(epsilon)|`` per relation.
     """
     poses = np.asarray(poses, dtype=float)

@@ -10,6 +10,7 @@ import json
 import statistics
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 from abcwc.types import Twist
 
@@ -130,6 +131,38 @@ def bench_posegraph() -> dict[str, float]:
     _, result = optimise(simulated.graph)
     figures["simulated 10,000 poses: edges"] = len(simulated.graph.edges)
     figures["simulated 10,000 poses: seconds"] = result.seconds
+
+
+def _slam_data() -> Path:
+    """The SLAM benchmark logs: ``ABCWC_SLAM_DATA``, else ``../shared/data/slam`` beside
+    the repository."""
+    import os
+
+    from abcwc.paths import REPO_ROOT
+
+    path = Path(os.environ.get("ABCWC_SLAM_DATA", REPO_ROOT.parent / "shared/data/slam"))
+    if not path.is_dir():
+        raise ValueError(f"SLAM benchmark data not found at {path} (set ABCWC_SLAM_DATA)")
+    return path
+
+
+@benchmark("carmen", "CARMEN log parse time (s) per benchmark log; ICP matches per second "
+                     "on 500 consecutive ACES scans")
+def bench_carmen() -> dict[str, float]:
+    from abcwc.mapping.carmen import read_carmen_log
+    from abcwc.mapping.icp import match_consecutive_scans
+
+    data = _slam_data()
+    figures: dict[str, float] = {}
+    for name in ("aces", "mit-csail", "fr079"):
+        start = time.perf_counter()
+        log = read_carmen_log(data / f"{name}.clf.gz")
+        figures[f"parse {name}.clf.gz ({len(log)} scans): s"] = time.perf_counter() - start
+    aces = read_carmen_log(data / "aces.clf.gz", max_range=50.0)
+    start = time.perf_counter()
+    matches = len(match_consecutive_scans(aces, 1000, 1500))
+    figures["ICP matches per second, ACES consecutive scans"] = (
+        matches / (time.perf_counter() - start))
     return figures
 
 

@@ -11,9 +11,10 @@ from pathlib import Path
 
 import pytest
 
+from abcwc.mapping.slam_data import slam_data_dir
+
 UNDER_CI = os.environ.get("CI", "").lower() == "true"
-SLAM_DATA = Path(os.environ.get(
-    "ABCWC_SLAM_DATA", Path(__file__).resolve().parents[1].parent / "shared" / "data" / "slam"))
+SLAM_DATA = slam_data_dir()
 
 
 def slam_file(name: str) -> Path:

@@ -1,8 +1,6 @@
 """The behaviour interface: status, rate, reset and cancel, and bad input refused."""
 
-import ast
 import math
-from pathlib import Path
 
 import pytest
 
@@ -163,20 +161,3 @@ def test_bad_settings_are_refused_with_what_is_allowed(make, message):
     with pytest.raises(ValueError, match=message):
         make()
 
-
-ESTIMATION = Path(__file__).resolve().parent.parent / "abcwc" / "estimation"
-ABOVE_ESTIMATION = ("abcwc.sim", "abcwc.base", "abcwc.connect", "abcwc.behaviours",
-                    "abcwc.experiments", "abcwc.navigation", "abcwc.hw", "abcwc.viz",
-                    "abcwc.checks", "abcwc.teleop", "abcwc.cli")
-
-
-def test_estimators_import_nothing_above_them():
-    """Estimation depends on messages, maths and parameters only (the README's layers)."""
-    offending = []
-    for path in sorted(ESTIMATION.glob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text())):
-            names = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
-                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
-            offending += [f"{path.name}: {name}" for name in names
-                          if name.startswith(ABOVE_ESTIMATION)]
-    assert not offending, offending

@@ -3,9 +3,7 @@ in the simulator's lab scored against its true walls."""
 
 from __future__ import annotations
 
-import ast
 import math
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -321,19 +319,3 @@ def test_a_map_of_the_lab_from_true_poses_finds_the_walls_it_saw():
     assert precision >= 0.9 and recall >= 0.85
     assert (truth & seen).sum() >= 0.75 * truth.sum()  # most of the lab was in view
 
-
-MAPPING = Path(__file__).resolve().parent.parent / "abcwc" / "mapping"
-ABOVE_MAPPING = ("abcwc.sim", "abcwc.base", "abcwc.connect", "abcwc.behaviours",
-                 "abcwc.experiments", "abcwc.navigation", "abcwc.hw", "abcwc.viz",
-                 "abcwc.checks", "abcwc.teleop", "abcwc.cli", "abcwc.control")
-
-
-def test_the_grid_modules_import_nothing_above_them():
-    """The grid, map files and scoring use messages, geometry, logs and parameters only."""
-    offending = []
-    for name in ("grid.py", "raytrace.py", "map_io.py", "truth.py"):
-        for node in ast.walk(ast.parse((MAPPING / name).read_text())):
-            modules = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
-                       else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
-            offending += [f"{name}: {m}" for m in modules if m.startswith(ABOVE_MAPPING)]
-    assert not offending, offending

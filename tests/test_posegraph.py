@@ -30,9 +30,9 @@ from abcwc.mapping.posegraph import (
     optimise,
     se2_log,
 )
-from abcwc.mapping.slam_data import REFERENCE_GRAPHS, SLAM_DATA_ENV, slam_data_dir
+from abcwc.mapping.slam_data import REFERENCE_GRAPHS
+from tests.slam_data import slam_file
 
-UNDER_CI = os.environ.get("CI", "").lower() == "true"
 REPO = Path(__file__).resolve().parents[1]
 
 
@@ -208,15 +208,9 @@ def test_progress_callback_and_option_errors(small_world):
 @pytest.fixture(scope="module")
 def shared_results():
     """Each shared graph: (graph, optimise's result), solved once for the module."""
-    folder = slam_data_dir()
-    if not folder.is_dir():
-        message = f"shared SLAM data not found at {folder} (set {SLAM_DATA_ENV})"
-        if UNDER_CI:
-            pytest.fail(message)
-        pytest.skip(message)
     results = {}
     for name, reference in REFERENCE_GRAPHS.items():
-        graph = read_g2o(folder / reference.file)
+        graph = read_g2o(slam_file(reference.file))
         results[name] = (graph, optimise(graph)[1])
     return results
 

@@ -12,6 +12,8 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from abcwc.paths import checkout_root
+
 SLAM_DATA_ENV = "ABCWC_SLAM_DATA"
 
 
@@ -41,4 +43,5 @@ def slam_data_dir() -> Path:
     override = os.environ.get(SLAM_DATA_ENV)
     if override:
         return Path(override)
-    return Path(__file__).resolve().parents[2].parent / "shared" / "data" / "slam"
+    root = checkout_root()
+    return (root.parent if root else Path.cwd()) / "shared" / "data" / "slam"

@@ -65,13 +65,55 @@ class IrRingParams:
 
 @dataclass(frozen=True)
 class GyroParams:
-    """Gyro z noise model: white noise per sample, turn-on bias, bias random walk."""
+    """Gyro z noise model: white noise per sample, turn-on bias, bias random walk.
+
+    ``variant`` says where the numbers come from: ``"datasheet"`` (the MPU-9250's noise
+    density and a published bias stability, see ``data/chair.toml`` and
+    :func:`gyro_from_datasheet`) or ``"pessimistic"`` (chapter 09's "what if").
+    """
 
     rate_hz: float
-    noise_std: float  # rad/s
+    noise_std: float  # rad/s, per sample
     bias_std: float  # rad/s
     bias_walk_std: float  # rad/s/sqrt(s)
     frame_id: str  # ROS frame id of the IMU, "imu_link"
+    variant: str = "datasheet"
+
+
+GYRO_VARIANTS = ("datasheet", "pessimistic")
+"""The gyro models ``data/chair.toml`` describes (see :func:`load_params`)."""
+
+
+def gyro_from_datasheet(noise_density_dps_rthz: float, bias_stability_dph: float,
+                        bias_stability_tau: float, rate_hz: float) -> tuple[float, float]:
+    """``(noise_std, bias_walk_std)`` from a gyro's datasheet / Allan-variance figures.
+
+    White noise of density ``N`` (deg/s/sqrt(Hz)) sampled every ``dt = 1 / rate_hz`` s
+    has std ``N / sqrt(dt)`` per sample (rad/s after conversion). A bias that wanders
+    by ``B`` (deg/h, the bias stability read off the Allan deviation at ``tau`` s) is
+    modelled as a random walk of ``B / sqrt(tau)`` (rad/s/sqrt(s)), whose std after
+    ``tau`` seconds is ``B``.
+    """
+    for name, value in (("noise density", noise_density_dps_rthz),
+                        ("bias stability", bias_stability_dph), ("tau", bias_stability_tau),
+                        ("rate", rate_hz)):
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"gyro {name} must be a finite number > 0, got {value!r}")
+    noise_std = math.radians(noise_density_dps_rthz) * math.sqrt(rate_hz)
+    bias_walk_std = math.radians(bias_stability_dph / 3600.0) / math.sqrt(bias_stability_tau)
+    return noise_std, bias_walk_std
+
+
+def _gyro(table: dict[str, Any], variant: str) -> GyroParams:
+    if variant not in GYRO_VARIANTS:
+        raise ValueError(f"gyro variant {variant!r} unknown; allowed: {', '.join(GYRO_VARIANTS)}")
+    noise_std, bias_walk_std = gyro_from_datasheet(
+        table["noise_density_dps_rthz"], table["bias_stability_dph"],
+        table["bias_stability_tau"], table["rate_hz"])
+    values = dict(table, noise_std=noise_std, bias_walk_std=bias_walk_std, variant=variant)
+    if variant != "datasheet":
+        values.update(table[variant])
+    return _pick(GyroParams, values)
 
 
 @dataclass(frozen=True)
@@ -165,8 +207,11 @@ def _pick(cls: type, table: dict[str, Any], **renames: str) -> Any:
     return cls(**kwargs)
 
 
-def load_params(path: str | Path | None = None) -> ChairParams:
-    """Read chair parameters from a TOML file (default ``data/chair.toml``)."""
+def load_params(path: str | Path | None = None, gyro: str = "datasheet") -> ChairParams:
+    """Read chair parameters from a TOML file (default ``data/chair.toml``).
+
+    ``gyro`` picks the gyro model: ``"datasheet"`` (default) or ``"pessimistic"``.
+    """
     path = Path(path) if path is not None else data_dir() / "chair.toml"
     with open(path, "rb") as handle:
         raw = tomllib.load(handle)
@@ -180,7 +225,7 @@ def load_params(path: str | Path | None = None) -> ChairParams:
         flat[key if key.startswith(("eqn1", "degrees", "adc")) else f"joystick_{key}"] = value
     flat["control_period"] = raw["control"]["period"]
     flat["watchdog_timeout"] = raw["control"]["watchdog_timeout"]
-    flat["gyro"] = _pick(GyroParams, sensors["gyro"])
+    flat["gyro"] = _gyro(sensors["gyro"], gyro)
     flat["ir"] = _pick(IrRingParams, sensors["ir"])
     for name in ("sonar", "depth_scan", "lidar"):
         flat[name] = _pick(RangeSensorParams, sensors[name])

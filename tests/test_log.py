@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from abcwc.log import CHANNELS, FORMAT_VERSION, LogRecorder, RunLog
+from abcwc.params import load_params
 from abcwc.sim import SimBase
 from abcwc.types import LaserScan, PotCommand, Twist, make_frame
 
@@ -48,8 +49,9 @@ V1_FIXTURE = Path(__file__).parent / "data" / "runlog_v1_lab_seed4.npz"
 
 
 def _fixture_drive() -> RunLog:
-    """The drive the v1 fixture recorded (1 s, lab, seed 4), recorded again now."""
-    chair = SimBase(seed=4, lidar=True, depth_scan=True)
+    """The drive the v1 fixture recorded (1 s, lab, seed 4), recorded again now (with the
+    gyro model of the time, today's "pessimistic" variant)."""
+    chair = SimBase(seed=4, lidar=True, depth_scan=True, params=load_params(gyro="pessimistic"))
     return chair.drive(Twist(0.5, 0.3), 1.0)
 
 

@@ -14,10 +14,15 @@ installed copy.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
+from typing import TypeVar
 
-__all__ = ["DATA_ENV", "NotACheckoutError", "checkout_root", "data_dir", "require_checkout"]
+__all__ = ["DATA_ENV", "NotACheckoutError", "checkout_root", "data_dir", "read_document",
+           "require_checkout"]
+
+_Parsed = TypeVar("_Parsed")
 
 DATA_ENV = "ABCWC_DATA"
 """Environment variable naming a data folder to use instead of the project's own."""
@@ -77,3 +82,16 @@ def data_dir() -> Path:
         f"abcwc data folder not found (looked in {', '.join(map(str, tried))}); reinstall "
         f"abcwc or set {DATA_ENV} to a copy of the repository's data/"
     )
+
+
+def read_document(path: Path, parse: Callable[[str], _Parsed], *,
+                  parse_errors: tuple[type[Exception], ...], error: type[Exception],
+                  kind: str, language: str) -> _Parsed:
+    """``parse(path's text)``; a missing file or a parse error raises ``error`` naming the
+    file: ``"<path>: no such <kind>"`` or ``"<path>: not valid <language> (<why>)"``."""
+    try:
+        return parse(Path(path).read_text())
+    except FileNotFoundError:
+        raise error(f"{path}: no such {kind}") from None
+    except parse_errors as exc:
+        raise error(f"{path}: not valid {language} ({exc})") from None

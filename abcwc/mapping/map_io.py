@@ -39,6 +39,7 @@ from abcwc.mapping.grid import (
     InverseSensorModel,
     OccupancyGrid,
 )
+from abcwc.paths import read_document
 
 PIXEL_OCCUPIED = 0
 PIXEL_FREE = 254
@@ -102,12 +103,8 @@ def read_header(yaml_path: str | Path) -> dict:
     folder), ``resolution`` (m), ``origin`` (x, y, yaw), ``negate`` (bool), the two
     thresholds and ``mode``."""
     yaml_path = Path(yaml_path)
-    try:
-        header = yaml.safe_load(yaml_path.read_text())
-    except FileNotFoundError:
-        raise MapFileError(f"{yaml_path}: no such map file") from None
-    except yaml.YAMLError as exc:
-        raise MapFileError(f"{yaml_path}: not valid YAML ({exc})") from None
+    header = read_document(yaml_path, yaml.safe_load, parse_errors=(yaml.YAMLError,),
+                           error=MapFileError, kind="map file", language="YAML")
     if not isinstance(header, dict):
         raise MapFileError(f"{yaml_path}: a map header is a mapping of "
                            f"{', '.join(REQUIRED_KEYS)}")

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from abcwc.paths import data_dir
+from abcwc.paths import data_dir, read_document
 from abcwc.types import Pose2D
 
 
@@ -179,10 +179,6 @@ def load_world(name_or_path: str | Path) -> World:
                 f"unknown world {str(name_or_path)!r}; available: {', '.join(available_worlds())}"
                 " (or give a path to a .json world file)"
             )
-    try:
-        raw = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise WorldError(f"world file {path} does not exist") from None
-    except json.JSONDecodeError as exc:
-        raise WorldError(f"{path}: not valid JSON ({exc})") from None
+    raw = read_document(path, json.loads, parse_errors=(json.JSONDecodeError,),
+                        error=WorldError, kind="world file", language="JSON")
     return world_from_dict(raw, source=path)

@@ -107,6 +107,32 @@ def bench_grid() -> dict[str, float]:
     }
 
 
+@benchmark("costmap", "costmaps: inflating a 500 x 500 global costmap, and a 5 x 5 m local "
+           "window at 0.05 m updated from one 360-beam scan (ms)")
+def bench_costmap() -> dict[str, float]:
+    import math
+
+    import numpy as np
+
+    from abcwc.navigation.costmap import Costmap
+    from abcwc.types import LaserScan
+
+    rng = np.random.default_rng(0)
+    global_map = Costmap(0.05, 500, 500, default=0)
+    global_map.cost[global_map.world_to_cell(rng.uniform(0, 25, (3000, 2)))] = 254
+    start = time.perf_counter()
+    global_map.inflate(0.16, 0.6)
+    inflate_ms = (time.perf_counter() - start) * 1000
+    scan = LaserScan(-math.pi, 2 * math.pi / 360, 0.15, 12.0,
+                     rng.uniform(0.5, 6.0, 360))
+    start = time.perf_counter()
+    local = Costmap.rolling_window((3.0, 4.0, 0.3), 5.0, 0.05)
+    local.add_scan(scan, (3.1, 4.0, 0.3), obstacle_range=2.5, raytrace_range=3.0)
+    local.inflate(0.16, 0.6)
+    local_ms = (time.perf_counter() - start) * 1000
+    return {"inflate 500 x 500 (ms)": inflate_ms, "local 5 x 5 m from one scan (ms)": local_ms}
+
+
 @benchmark("posegraph", "pose-graph LM: the shared SLAM graphs (chi2, s) and a 10,000-pose "
            "simulated graph")
 def bench_posegraph() -> dict[str, float]:

@@ -85,16 +85,15 @@ class InverseSensorModel:
                              f"got {self}")
 
 
-class OccupancyGrid:
-    """A fixed-extent log-odds occupancy grid: ``height`` rows by ``width`` columns of
-    ``resolution`` m, the corner of cell (0, 0) at map pose ``origin`` (x m, y m, yaw rad).
-
-    ``log_odds`` is the (height, width) float array, indexed ``[row, col]`` (row = y).
+class GridGeometry:
+    """A fixed-extent grid of cells: ``height`` rows by ``width`` columns of ``resolution``
+    m, the corner of cell (0, 0) at map pose ``origin`` (x m, y m, yaw rad), as map_server
+    and costmap_2d lay them out. Arrays over it are indexed ``[row, col]`` (row = y).
+    Occupancy grids and costmaps are grids of this shape.
     """
 
     def __init__(self, resolution: float, width: int, height: int,
-                 origin: PoseLike = (0.0, 0.0, 0.0),
-                 model: InverseSensorModel | None = None):
+                 origin: PoseLike = (0.0, 0.0, 0.0)):
         if not (isinstance(resolution, (int, float)) and math.isfinite(resolution)
                 and resolution > 0):
             raise ValueError(f"resolution must be a finite number > 0 m/cell, got {resolution!r}")
@@ -108,21 +107,19 @@ class OccupancyGrid:
         self.resolution = float(resolution)
         self.width, self.height = int(width), int(height)
         self.origin = pose
-        self.model = model or InverseSensorModel()
-        self.log_odds = np.zeros((self.height, self.width))
 
-    @classmethod
-    def covering(cls, xmin: float, ymin: float, xmax: float, ymax: float, resolution: float,
-                 margin: float = 0.0, model: InverseSensorModel | None = None) -> OccupancyGrid:
-        """An axis-aligned grid (yaw 0) over the map rectangle ``[xmin, xmax] x [ymin, ymax]``
-        grown by ``margin`` m on every side (all m)."""
+    @staticmethod
+    def extent(xmin: float, ymin: float, xmax: float, ymax: float, resolution: float,
+               margin: float = 0.0) -> tuple[int, int, tuple[float, float, float]]:
+        """``(width, height, origin)`` of an axis-aligned grid (yaw 0) over the map rectangle
+        ``[xmin, xmax] x [ymin, ymax]`` grown by ``margin`` m on every side (all m)."""
         if not (xmax > xmin and ymax > ymin):
             raise ValueError(f"need xmin < xmax and ymin < ymax, got "
                              f"({xmin}, {ymin}) .. ({xmax}, {ymax})")
         x0, y0 = xmin - margin, ymin - margin
         width = math.ceil((xmax + margin - x0) / resolution - 1e-9)
         height = math.ceil((ymax + margin - y0) / resolution - 1e-9)
-        return cls(resolution, max(width, 1), max(height, 1), (x0, y0, 0.0), model)
+        return max(width, 1), max(height, 1), (x0, y0, 0.0)
 
     # ------------------------------------------------------------ geometry
     @property
@@ -152,7 +149,7 @@ class OccupancyGrid:
         rows, cols = np.asarray(rows), np.asarray(cols)
         return (rows >= 0) & (rows < self.height) & (cols >= 0) & (cols < self.width)
 
-    # ------------------------------------------------------------ updates
+    # ------------------------------------------------------------ scans
     def scan_cells(self, scan: LaserScan,
                    sensor_pose: PoseLike) -> tuple[np.ndarray, np.ndarray]:
         """Flat indices (``row * width + col``) of the grid cells one scan's beams passed
@@ -177,6 +174,27 @@ class OccupancyGrid:
         inside = self.contains(walk.row, walk.col)
         flat = walk.row * self.width + walk.col
         return flat[~returned & inside], flat[returned & inside]
+
+class OccupancyGrid(GridGeometry):
+    """A fixed-extent log-odds occupancy grid (see :class:`GridGeometry` for its cells).
+
+    ``log_odds`` is the (height, width) float array, indexed ``[row, col]`` (row = y).
+    """
+
+    def __init__(self, resolution: float, width: int, height: int,
+                 origin: PoseLike = (0.0, 0.0, 0.0),
+                 model: InverseSensorModel | None = None):
+        super().__init__(resolution, width, height, origin)
+        self.model = model or InverseSensorModel()
+        self.log_odds = np.zeros((self.height, self.width))
+
+    @classmethod
+    def covering(cls, xmin: float, ymin: float, xmax: float, ymax: float, resolution: float,
+                 margin: float = 0.0, model: InverseSensorModel | None = None) -> OccupancyGrid:
+        """An axis-aligned grid (yaw 0) over the map rectangle ``[xmin, xmax] x [ymin, ymax]``
+        grown by ``margin`` m on every side (all m)."""
+        width, height, origin = cls.extent(xmin, ymin, xmax, ymax, resolution, margin)
+        return cls(resolution, width, height, origin, model)
 
     def integrate(self, scan: LaserScan, sensor_pose: PoseLike) -> None:
         """Add one scan taken from ``sensor_pose`` (the scanner's map pose) to the grid:

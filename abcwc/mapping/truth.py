@@ -17,11 +17,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import distance_transform_edt
 
-from abcwc.mapping.grid import OccupancyGrid
+from abcwc.mapping.grid import GridGeometry, OccupancyGrid
 from abcwc.mapping.raytrace import walk_cells
 
 
-def rasterise_walls(walls: np.ndarray, grid: OccupancyGrid) -> np.ndarray:
+def rasterise_walls(walls: np.ndarray, grid: GridGeometry) -> np.ndarray:
     """(height, width) bool on ``grid``'s cells: True where a wall segment (N, 4: x1 y1 x2
     y2, m, map frame) passes through the cell. Parts of walls outside the grid are
     dropped."""

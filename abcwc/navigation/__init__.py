@@ -1,4 +1,5 @@
-"""Navigation behaviours: sonar avoidance now; costmaps and planners later."""
+"""Navigation: the sonar avoider, and costmaps (:mod:`abcwc.navigation.costmap`) for the
+planners to come."""
 
 from abcwc.navigation.sonar_avoid import SonarAvoider
 

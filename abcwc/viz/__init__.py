@@ -13,6 +13,7 @@ and for a moving picture, ``HTML(viz.to_html(viz.animate_run(log, chair.world)))
 """
 
 from abcwc.viz.animation import animate_run, frame_rows, save_animation, to_html
+from abcwc.viz.costmap import costmap_colours, plot_costmap
 from abcwc.viz.scene import (
     ChairArtist,
     chair_outlines,
@@ -37,12 +38,14 @@ __all__ = [
     "SIGNALS",
     "ChairArtist",
     "animate_run",
+    "costmap_colours",
     "chair_outlines",
     "collision_rows",
     "encoder_velocity",
     "frame_rows",
     "mount_pose",
     "plot_chair",
+    "plot_costmap",
     "plot_log_scan",
     "plot_people",
     "plot_run",

@@ -1,0 +1,41 @@
+"""Costmaps drawn the way RViz shows them (its "costmap" colour scheme).
+
+Free cells are left clear, inflated cells run from blue (cheap) through red (costly),
+``INSCRIBED`` cells are cyan, ``LETHAL`` cells magenta and unknown cells grey, over the
+map frame in metres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.colors import ListedColormap
+
+from abcwc.navigation.costmap import INSCRIBED, LETHAL, NO_INFORMATION, Costmap
+from abcwc.viz._common import new_axes
+
+
+def costmap_colours() -> ListedColormap:
+    """256 colours, one per cost byte, after RViz's costmap scheme."""
+    colours = np.zeros((256, 4))
+    ramp = np.linspace(0.0, 1.0, INSCRIBED - 1)[:, None]
+    colours[1:INSCRIBED] = np.hstack([ramp, np.zeros_like(ramp), 1.0 - ramp,
+                                      np.full_like(ramp, 0.55)])  # blue -> red
+    colours[INSCRIBED] = (0.0, 1.0, 1.0, 0.8)  # cyan
+    colours[LETHAL] = (1.0, 0.0, 1.0, 0.9)  # magenta
+    colours[NO_INFORMATION] = (0.6, 0.6, 0.6, 0.5)  # grey
+    return ListedColormap(colours, name="costmap")
+
+
+def plot_costmap(costmap: Costmap, ax: Axes | None = None) -> Axes:
+    """Draw ``costmap`` (axis-aligned, yaw 0) in the map frame (m); returns the Axes."""
+    if abs(costmap.origin.theta) > 1e-12:
+        raise ValueError("plot_costmap draws axis-aligned costmaps (origin yaw 0)")
+    ax = new_axes(ax)
+    x0, y0 = costmap.origin.x, costmap.origin.y
+    extent = (x0, x0 + costmap.width * costmap.resolution,
+              y0, y0 + costmap.height * costmap.resolution)
+    ax.imshow(costmap.cost, cmap=costmap_colours(), vmin=0, vmax=255, origin="lower",
+              extent=extent, interpolation="nearest")
+    ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal")
+    return ax

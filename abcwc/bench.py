@@ -133,6 +133,34 @@ def bench_costmap() -> dict[str, float]:
     return {"inflate 500 x 500 (ms)": inflate_ms, "local 5 x 5 m from one scan (ms)": local_ms}
 
 
+@benchmark("planner", "global planner across a 500 x 500 costmap at 0.05 m, corner to corner "
+           "(ms): graph, Dijkstra, smoothing")
+def bench_planner() -> dict[str, float]:
+    import numpy as np
+    from scipy.sparse.csgraph import dijkstra
+
+    from abcwc.navigation.costmap import Costmap
+    from abcwc.navigation.planner import cell_weights, grid_graph, plan, smooth
+
+    rng = np.random.default_rng(0)
+    costmap = Costmap(0.05, 500, 500, default=0)
+    costmap.cost[costmap.world_to_cell(rng.uniform(0, 25, (600, 2)))] = 254
+    costmap.inflate(0.16, 0.6)
+    costmap.cost[5, 5] = costmap.cost[495, 495] = 0
+    start, goal = costmap.cell_to_world(5, 5), costmap.cell_to_world(495, 495)
+    t0 = time.perf_counter()
+    graph = grid_graph(cell_weights(costmap)).tocsr()
+    t1 = time.perf_counter()
+    dijkstra(graph, indices=5 * 500 + 5)
+    t2 = time.perf_counter()
+    path = plan(costmap, start, goal)
+    t3 = time.perf_counter()
+    smooth(costmap, path)
+    t4 = time.perf_counter()
+    return {"graph (ms)": (t1 - t0) * 1000, "Dijkstra (ms)": (t2 - t1) * 1000,
+            "whole plan (ms)": (t3 - t2) * 1000, "smoothing (ms)": (t4 - t3) * 1000}
+
+
 @benchmark("posegraph", "pose-graph LM: the shared SLAM graphs (chi2, s) and a 10,000-pose "
            "simulated graph")
 def bench_posegraph() -> dict[str, float]:

@@ -1,5 +1,5 @@
-"""Navigation: the sonar avoider, and costmaps (:mod:`abcwc.navigation.costmap`) for the
-planners to come."""
+"""Navigation: the sonar avoider; costmaps (:mod:`abcwc.navigation.costmap`) and the global
+planner (:mod:`abcwc.navigation.planner`) for the navigator to come."""
 
 from abcwc.navigation.sonar_avoid import SonarAvoider
 

@@ -1,0 +1,124 @@
+"""The global planner: A* and the sparse Dijkstra agree with an independent reference."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.sparse import lil_matrix
+from scipy.sparse.csgraph import shortest_path
+
+from abcwc.navigation.costmap import FREE_SPACE, INSCRIBED, LETHAL, NO_INFORMATION, Costmap
+from abcwc.navigation.planner import (
+    COST_FACTOR,
+    COST_NEUTRAL,
+    NoPathError,
+    astar,
+    plan,
+    smooth,
+)
+
+
+def random_costmap(seed, size=24):
+    rng = np.random.default_rng(seed)
+    costmap = Costmap(0.1, size, size, default=FREE_SPACE)
+    costmap.cost[rng.random(costmap.shape) < 0.08] = LETHAL
+    costmap.inflate(0.05, 0.4)
+    costmap.cost[rng.random(costmap.shape) < 0.03] = NO_INFORMATION
+    costmap.cost[1, 1] = costmap.cost[size - 2, size - 2] = FREE_SPACE
+    return costmap
+
+
+def reference_cost(costmap, start, goal):
+    """The least path cost by scipy's Floyd-Warshall-free shortest_path on a graph built
+    here cell by cell, with the module's weights written out again."""
+    h, w = costmap.shape
+    graph = lil_matrix((h * w, h * w))
+
+    def weight(r, c):
+        value = int(costmap.cost[r, c])
+        if value == NO_INFORMATION:
+            value = INSCRIBED - 1
+        elif value >= INSCRIBED:
+            return math.inf
+        return COST_NEUTRAL + COST_FACTOR * value
+
+    for r in range(h):
+        for c in range(w):
+            for dr in (-1, 0, 1):
+                for dc in (-1, 0, 1):
+                    rr, cc = r + dr, c + dc
+                    if (dr or dc) and 0 <= rr < h and 0 <= cc < w:
+                        step = math.hypot(dr, dc) * (weight(r, c) + weight(rr, cc)) / 2
+                        if math.isfinite(step):
+                            graph[r * w + c, rr * w + cc] = step
+    distances = shortest_path(graph.tocsr(), method="J", indices=start[0] * w + start[1])
+    return distances[goal[0] * w + goal[1]]
+
+
+def path_cost(costmap, cells):
+    """A path's cost summed move by move (the planner's own rule, recomputed)."""
+    cost = 0.0
+    for (r0, c0), (r1, c1) in zip(cells[:-1], cells[1:]):
+        assert max(abs(r1 - r0), abs(c1 - c0)) == 1  # 8-connected moves only
+        w0, w1 = (COST_NEUTRAL + COST_FACTOR * min(int(costmap.cost[r, c]), INSCRIBED - 1)
+                  for r, c in ((r0, c0), (r1, c1)))
+        cost += math.hypot(r1 - r0, c1 - c0) * (w0 + w1) / 2
+    return cost
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_both_searches_find_the_least_cost_of_an_independent_reference(seed):
+    costmap = random_costmap(seed)
+    start, goal = costmap.cell_to_world(1, 1), costmap.cell_to_world(22, 22)
+    expected = reference_cost(costmap, (1, 1), (22, 22))
+    if not math.isfinite(expected):
+        with pytest.raises(NoPathError):
+            plan(costmap, start, goal)
+        return
+    for path in (plan(costmap, start, goal), astar(costmap, start, goal)):
+        assert path.cost == pytest.approx(expected, rel=1e-9)
+        assert path_cost(costmap, path.cells) == pytest.approx(expected, rel=1e-9)
+        assert tuple(path.cells[0]) == (1, 1) and tuple(path.cells[-1]) == (22, 22)
+        assert (costmap.cost[path.cells[:, 0], path.cells[:, 1]] != LETHAL).all()
+
+
+def test_the_path_keeps_away_from_walls_where_it_can():
+    """A 3 m wide corridor with a wall on one side: the path runs where the inflation is
+    cheapest, not along the wall."""
+    costmap = Costmap(0.05, 120, 60, default=FREE_SPACE)
+    costmap.cost[0, :] = LETHAL
+    costmap.inflate(0.16, 1.0, 3.0)
+    path = plan(costmap, (0.5, 1.5), (5.5, 1.5))
+    assert path.points[:, 1].min() > 1.0
+    straight = astar(costmap, (0.5, 1.5), (5.5, 1.5))
+    assert straight.cost == pytest.approx(path.cost)
+
+
+def test_smoothing_shortens_a_staircase_without_crossing_costlier_cells():
+    costmap = Costmap(0.1, 40, 40, default=FREE_SPACE)
+    costmap.cost[10:30, 20] = LETHAL
+    costmap.inflate(0.1, 0.3)
+    path = plan(costmap, (0.5, 2.0), (3.5, 2.2))
+    smoothed = smooth(costmap, path)
+    assert len(smoothed.cells) < len(path.cells) and smoothed.length <= path.length + 1e-9
+    assert tuple(smoothed.cells[0]) == tuple(path.cells[0])
+    assert tuple(smoothed.cells[-1]) == tuple(path.cells[-1])
+
+
+def test_impossible_goals_say_why():
+    costmap = Costmap(0.1, 30, 30, default=FREE_SPACE)
+    costmap.cost[:, 15] = LETHAL  # a wall from edge to edge
+    with pytest.raises(NoPathError, match="walled off"):
+        plan(costmap, (0.5, 0.5), (2.5, 0.5))
+    with pytest.raises(NoPathError, match="walled off"):
+        astar(costmap, (0.5, 0.5), (2.5, 0.5))
+    with pytest.raises(NoPathError, match="in an obstacle"):
+        plan(costmap, (0.5, 0.5), (1.55, 0.5))
+    with pytest.raises(NoPathError, match="off the costmap"):
+        plan(costmap, (0.5, 0.5), (9.0, 0.5))
+    with pytest.raises(ValueError, match="finite"):
+        plan(costmap, (math.nan, 0.5), (1.0, 0.5))
+    costmap.cost[:, 15] = NO_INFORMATION
+    assert plan(costmap, (0.5, 0.5), (2.5, 0.5)).cost > 0
+    with pytest.raises(NoPathError):
+        plan(costmap, (0.5, 0.5), (2.5, 0.5), allow_unknown=False)

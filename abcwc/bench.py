@@ -161,6 +161,30 @@ def bench_planner() -> dict[str, float]:
             "whole plan (ms)": (t3 - t2) * 1000, "smoothing (ms)": (t4 - t3) * 1000}
 
 
+@benchmark("dwa", "one DWA cycle with A.17's 8 x 20 samples on a 5 x 5 m local costmap at "
+           "0.05 m (ms)")
+def bench_dwa() -> dict[str, float]:
+    import numpy as np
+
+    from abcwc.navigation.costmap import Costmap, chair_footprint
+    from abcwc.navigation.dwa import DwaPlanner
+    from abcwc.params import default_params
+
+    footprint = chair_footprint(default_params())
+    costmap = Costmap.rolling_window((0.0, 0.0, 0.0), 5.0, 0.05, default=0)
+    rng = np.random.default_rng(0)
+    costmap.cost[costmap.world_to_cell(rng.uniform(-2.5, 2.5, (40, 2)))] = 254
+    costmap.inflate(footprint.inscribed_radius, 0.6)
+    path = np.column_stack([np.linspace(0.0, 2.4, 60), np.zeros(60)])
+    planner = DwaPlanner(footprint)
+    times = []
+    for _ in range(50):
+        start = time.perf_counter()
+        planner.plan(costmap, (0.0, 0.0, 0.0), (0.5, 0.0), path)
+        times.append((time.perf_counter() - start) * 1000)
+    return {"one cycle, median of 50 (ms)": statistics.median(times)}
+
+
 @benchmark("posegraph", "pose-graph LM: the shared SLAM graphs (chi2, s) and a 10,000-pose "
            "simulated graph")
 def bench_posegraph() -> dict[str, float]:

@@ -131,7 +131,10 @@ class GridGeometry:
         """Map-frame points ``(..., 2)`` (m) in grid units: their x, y in the grid's frame
         (from ``origin``) divided by the resolution, so their cell is ``(col, row) = floor``
         of the answer."""
-        return inverse_transform_points(self.origin, np.asarray(points, float)) / self.resolution
+        points = np.asarray(points, float)
+        if self.origin.theta == 0.0:  # axis-aligned (as most are): a shift, the same numbers
+            return (points - (self.origin.x, self.origin.y)) / self.resolution
+        return inverse_transform_points(self.origin, points) / self.resolution
 
     def world_to_cell(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Rows and columns (int arrays of shape ``points.shape[:-1]``) of the cells holding

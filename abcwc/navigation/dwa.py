@@ -1,0 +1,207 @@
+"""The Dynamic Window Approach local planner, as ROS's base_local_planner runs it with
+``dwa: true`` (Fox, Burgard and Thrun, "The dynamic window approach to collision
+avoidance", IEEE Robotics and Automation Magazine 4(1), 1997).
+
+Every control cycle (``controller_frequency``, 5 Hz in the thesis's A.17):
+
+1. **The window.** Only velocities reachable within one cycle are sampled:
+   ``v in [v0 - acc_lim_x / f, v0 + acc_lim_x / f]`` and likewise ``w`` with
+   ``acc_lim_theta``, clipped to the limits; ``vx_samples x vtheta_samples`` pairs
+   (A.17: 8 x 20).
+2. **Roll-out.** Each pair is held for ``sim_time`` (1 s) along its exact arc,
+   ``x(t) = x0 + v/w (sin(th0 + w t) - sin th0)``, ``y(t) = y0 - v/w (cos(th0 + w t) -
+   cos th0)``, sampled so that neighbouring points lie at most ``sim_granularity`` m and
+   ``angular_sim_granularity`` rad apart (one step count for all pairs: the largest
+   any of them needs).
+3. **Scoring.** A trajectory whose footprint comes within reach of a lethal or unknown
+   cell, or leaves the costmap, is dropped. The footprint is checked as three equal
+   circles that cover its rectangle (:func:`covering_circles`), against a distance
+   transform of the obstacles: a few centimetres more cautious at the corners than
+   base_local_planner's outline check, and one array lookup per circle. The others
+   cost (base_local_planner's ``meter_scoring``)::
+
+       pdist_scale * path_distance + gdist_scale * goal_distance + occdist_scale * max_cost
+
+   with ``path_distance`` and ``goal_distance`` (m) from the trajectory's end to the
+   nearest cell of the global path and to the local goal (the last path point inside
+   the window), and ``max_cost`` the highest costmap value under its footprint. The two
+   distance maps are Euclidean distance transforms of the path and goal cells, where
+   base_local_planner's ``MapGrid`` runs a wavefront around obstacles: a trajectory
+   ending behind a thin wall looks closer here than it is, and the global path, which
+   goes round the wall, is what keeps that from mattering.
+4. **The command** is the cheapest trajectory's ``(v, w)``; with none left the chair
+   stops and :attr:`DwaResult.stuck` says so (move_base would start its recoveries).
+
+Every trajectory is rolled out and scored in one set of array operations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from abcwc.geometry import PoseLike
+from abcwc.navigation.costmap import LETHAL, Costmap, Footprint
+from abcwc.params import LocalPlannerParams, NavigationParams, load_navigation_params
+from abcwc.types import Pose2D, Twist
+
+
+@dataclass(frozen=True)
+class DwaResult:
+    """One cycle's outcome: the ``command``; every sampled ``(v, w)`` (S, 2), its
+    trajectory ``poses`` (S, T, 3), ``valid`` mask and ``cost`` (inf where invalid), and
+    ``best`` (index into the samples, -1 when ``stuck``)."""
+
+    command: Twist
+    samples: np.ndarray
+    poses: np.ndarray
+    valid: np.ndarray
+    cost: np.ndarray
+    best: int
+
+    @property
+    def stuck(self) -> bool:
+        """True when every sampled trajectory collides: the chair is told to stop."""
+        return self.best < 0
+
+
+def covering_circles(footprint: Footprint, count: int = 3) -> tuple[np.ndarray, float]:
+    """``(centres (count, 2), radius)``: equal circles along the footprint's length that
+    together cover its bounding rectangle (m, base_link). Checking a few circles against
+    a distance-to-obstacle map is what makes every trajectory's check one array lookup."""
+    xs, ys = footprint.polygon[:, 0], footprint.polygon[:, 1]
+    length, half_width = xs.max() - xs.min(), (ys.max() - ys.min()) / 2
+    step = length / count
+    centres = np.column_stack([xs.min() + step * (np.arange(count) + 0.5),
+                               np.full(count, (ys.max() + ys.min()) / 2)])
+    return centres, float(math.hypot(step / 2, half_width))
+
+
+def roll_out(pose: PoseLike, samples: np.ndarray, sim_time: float, steps: int) -> np.ndarray:
+    """The exact arcs (S, steps + 1, 3) of holding each ``(v, w)`` sample for ``sim_time``
+    s from ``pose``, at ``steps`` equal time steps (the first point is the pose itself)."""
+    x0, y0, th0 = (pose.x, pose.y, pose.theta) if isinstance(pose, Pose2D) else pose
+    v, w = samples[:, :1], samples[:, 1:]
+    t = np.linspace(0.0, sim_time, steps + 1)[None, :]
+    theta = th0 + w * t
+    turning = np.abs(w) > 1e-9
+    safe_w = np.where(turning, w, 1.0)
+    x = np.where(turning, x0 + v / safe_w * (np.sin(theta) - math.sin(th0)),
+                 x0 + v * t * math.cos(th0))
+    y = np.where(turning, y0 - v / safe_w * (np.cos(theta) - math.cos(th0)),
+                 y0 + v * t * math.sin(th0))
+    return np.stack([x, y, theta], axis=-1)
+
+
+def _cells(costmap: Costmap, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows and columns of map points given as separate x and y arrays (m)."""
+    if costmap.origin.theta != 0.0:
+        return costmap.world_to_cell(np.stack([x, y], axis=-1))
+    cols = np.floor((x - costmap.origin.x) / costmap.resolution).astype(np.int64)
+    rows = np.floor((y - costmap.origin.y) / costmap.resolution).astype(np.int64)
+    return rows, cols
+
+
+class DwaPlanner:
+    """base_local_planner's DWA with A.17's parameters by default (``params``), for a
+    chair of ``footprint``. Call :meth:`plan` once per control cycle."""
+
+    def __init__(self, footprint: Footprint, params: NavigationParams | None = None,
+                 local: LocalPlannerParams | None = None):
+        nav = params or load_navigation_params()
+        self.local = local or nav.local_planner
+        self.frequency = nav.move_base.controller_frequency
+        self.footprint = footprint
+        self._circles, self._radius = covering_circles(footprint)
+        lp = self.local
+        if not (lp.vx_samples >= 1 and lp.vtheta_samples >= 1):
+            raise ValueError("vx_samples and vtheta_samples must be >= 1")
+        if not (lp.sim_time > 0 and lp.sim_granularity > 0 and lp.angular_sim_granularity > 0):
+            raise ValueError("sim_time and the sim granularities must be > 0")
+
+    def window(self, velocity: tuple[float, float]) -> np.ndarray:
+        """The (S, 2) ``(v, w)`` samples reachable in one cycle from ``velocity``."""
+        v0, w0 = velocity
+        if not (math.isfinite(v0) and math.isfinite(w0)):
+            raise ValueError(f"velocity must be a finite (v m/s, w rad/s), got {velocity!r}")
+        lp, period = self.local, 1.0 / self.frequency
+        v_lo = max(lp.min_vel_x, v0 - lp.acc_lim_x * period)
+        v_hi = min(lp.max_vel_x, v0 + lp.acc_lim_x * period)
+        w_lo = max(-lp.max_vel_theta, w0 - lp.acc_lim_theta * period)
+        w_hi = min(lp.max_vel_theta, w0 + lp.acc_lim_theta * period)
+        v, w = np.meshgrid(np.linspace(min(v_lo, v_hi), v_hi, lp.vx_samples),
+                           np.linspace(min(w_lo, w_hi), w_hi, lp.vtheta_samples),
+                           indexing="ij")
+        return np.column_stack([v.ravel(), w.ravel()])
+
+    def plan(self, costmap: Costmap, pose: PoseLike, velocity: tuple[float, float],
+             path: np.ndarray) -> DwaResult:
+        """One cycle: the command that follows ``path`` ((K, 2) map points, m, from the
+        global planner) from ``pose`` at ``velocity`` without touching an obstacle."""
+        path = np.asarray(path, dtype=float).reshape(-1, 2)
+        if not len(path) or not np.isfinite(path).all():
+            raise ValueError("path must be a non-empty (K, 2) array of finite map points (m)")
+        lp = self.local
+        samples = self.window(velocity)
+        reach = np.abs(samples).max(axis=0) * lp.sim_time
+        steps = max(1, math.ceil(max(reach[0] / lp.sim_granularity,
+                                     reach[1] / lp.angular_sim_granularity)))
+        poses = roll_out(pose, samples, lp.sim_time, steps)
+
+        # the footprint as covering circles at every pose: clear if every circle's centre
+        # is farther than its radius from the nearest lethal or unknown cell
+        c, s = np.cos(poses[..., 2:]), np.sin(poses[..., 2:])
+        cx = poses[..., :1] + c * self._circles[:, 0] - s * self._circles[:, 1]
+        cy = poses[..., 1:2] + s * self._circles[:, 0] + c * self._circles[:, 1]
+        rows, cols = _cells(costmap, cx, cy)
+        on_map = costmap.contains(rows, cols).reshape(len(samples), -1).all(axis=1)
+        rows = np.clip(rows, 0, costmap.height - 1)
+        cols = np.clip(cols, 0, costmap.width - 1)
+        clearance = ndimage.distance_transform_edt(costmap.cost < LETHAL) * costmap.resolution
+        # a cell's distance is centre to centre: half a cell's diagonal is the slack
+        slack = costmap.resolution / math.sqrt(2)
+        clear = (clearance[rows, cols] > self._radius + slack).reshape(len(samples), -1)
+        worst = costmap.cost[rows, cols].reshape(len(samples), -1).max(axis=1)
+        valid = on_map & clear.all(axis=1)
+
+        path_distance, goal_distance = self._distance_maps(costmap, path)
+        end_rows, end_cols = _cells(costmap, poses[:, -1, 0], poses[:, -1, 1])
+        inside = costmap.contains(end_rows, end_cols)
+        end_rows = np.clip(end_rows, 0, costmap.height - 1)
+        end_cols = np.clip(end_cols, 0, costmap.width - 1)
+        cost = (lp.pdist_scale * path_distance[end_rows, end_cols]
+                + lp.gdist_scale * goal_distance[end_rows, end_cols]
+                + lp.occdist_scale * worst)
+        valid &= inside
+        cost = np.where(valid, cost, np.inf)
+        if not valid.any():
+            return DwaResult(Twist(0.0, 0.0), samples, poses, valid, cost, -1)
+        best = int(np.argmin(cost))
+        return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])), samples,
+                         poses, valid, cost, best)
+
+    @staticmethod
+    def _distance_maps(costmap: Costmap, path: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distances (m) from every cell to the path's cells inside the window and to the
+        local goal (the last path point inside it, or the path point nearest the window)."""
+        rows, cols = costmap.world_to_cell(path)
+        inside = costmap.contains(rows, cols)
+        if inside.any():
+            path_rows, path_cols = rows[inside], cols[inside]
+            goal = (path_rows[-1], path_cols[-1])
+        else:  # the path lies outside the window: aim at its nearest point, clipped in
+            centre = costmap.cell_to_world(costmap.height // 2, costmap.width // 2)
+            nearest = int(np.argmin(np.hypot(*(path - centre).T)))
+            goal = (int(np.clip(rows[nearest], 0, costmap.height - 1)),
+                    int(np.clip(cols[nearest], 0, costmap.width - 1)))
+            path_rows, path_cols = np.array([goal[0]]), np.array([goal[1]])
+        not_path = np.ones(costmap.shape, dtype=bool)
+        not_path[path_rows, path_cols] = False
+        not_goal = np.ones(costmap.shape, dtype=bool)
+        not_goal[goal] = False
+        res = costmap.resolution
+        return (ndimage.distance_transform_edt(not_path) * res,
+                ndimage.distance_transform_edt(not_goal) * res)

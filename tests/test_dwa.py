@@ -1,0 +1,104 @@
+"""The DWA local planner: exact arcs, the dynamic window, and no trajectory into a wall."""
+
+import math
+
+import numpy as np
+import pytest
+
+from abcwc.navigation.costmap import FREE_SPACE, LETHAL, Costmap, chair_footprint, footprint_cost
+from abcwc.navigation.dwa import DwaPlanner, covering_circles, roll_out
+from abcwc.params import default_params
+
+FOOTPRINT = chair_footprint(default_params())
+
+
+def test_roll_out_follows_the_exact_arc():
+    """Against a fine Euler integration of the unicycle, and the straight line at w = 0."""
+    samples = np.array([[0.5, 0.5], [0.8, 0.0], [-0.3, -1.2]])
+    poses = roll_out((1.0, 2.0, 0.3), samples, 1.0, 40)
+    for (v, w), trajectory in zip(samples, poses):
+        x, y, th = 1.0, 2.0, 0.3
+        dt = 1e-5
+        for _ in range(100_000):
+            x, y, th = x + v * math.cos(th) * dt, y + v * math.sin(th) * dt, th + w * dt
+        assert trajectory[-1] == pytest.approx([x, y, th], abs=2e-5)
+    assert np.allclose(poses[1, :, 2], 0.3)  # straight: the heading never changes
+
+
+def test_the_window_holds_what_one_cycle_can_reach():
+    planner = DwaPlanner(FOOTPRINT)
+    samples = planner.window((0.0, 0.0))
+    lp, period = planner.local, 1.0 / planner.frequency  # A.17: 5 Hz
+    assert len(samples) == lp.vx_samples * lp.vtheta_samples == 160
+    assert np.abs(samples[:, 0]).max() == pytest.approx(lp.acc_lim_x * period)  # 0.72 m/s
+    assert np.abs(samples[:, 1]).max() == pytest.approx(lp.acc_lim_theta * period)  # 0.3
+    fast = planner.window((1.2, 1.5))
+    assert fast[:, 0].max() == pytest.approx(lp.max_vel_x)  # clipped at 1.28 m/s
+    assert fast[:, 1].max() == pytest.approx(lp.max_vel_theta)
+    with pytest.raises(ValueError, match="velocity"):
+        planner.window((math.nan, 0.0))
+
+
+def test_the_covering_circles_cover_the_footprint():
+    centres, radius = covering_circles(FOOTPRINT)
+    rng = np.random.default_rng(0)
+    xs, ys = FOOTPRINT.polygon[:, 0], FOOTPRINT.polygon[:, 1]
+    points = np.column_stack([rng.uniform(xs.min(), xs.max(), 2000),
+                              rng.uniform(ys.min(), ys.max(), 2000)])
+    nearest = np.min(np.hypot(points[:, None, 0] - centres[:, 0],
+                              points[:, None, 1] - centres[:, 1]), axis=1)
+    assert (nearest <= radius + 1e-12).all()
+
+
+def corridor(wall_x=None):
+    """A 5 x 5 m window around the origin: walls 1 m to each side, and one across at
+    ``wall_x`` if given; inflated for the chair."""
+    costmap = Costmap.rolling_window((0.0, 0.0, 0.0), 5.0, 0.05, default=FREE_SPACE)
+    xs = np.linspace(-2.4, 2.4, 200)
+    for y in (-1.0, 1.0):
+        costmap.cost[costmap.world_to_cell(np.column_stack([xs, np.full_like(xs, y)]))] = LETHAL
+    if wall_x is not None:
+        ys = np.linspace(-1.0, 1.0, 80)
+        costmap.cost[costmap.world_to_cell(np.column_stack([np.full_like(ys, wall_x), ys]))] = \
+            LETHAL
+    costmap.inflate(FOOTPRINT.inscribed_radius, 0.6)
+    return costmap
+
+
+PATH = np.column_stack([np.linspace(0.0, 2.4, 60), np.zeros(60)])
+
+
+def test_it_follows_the_path_down_a_clear_corridor():
+    result = DwaPlanner(FOOTPRINT).plan(corridor(), (0.0, 0.0, 0.0), (0.5, 0.0), PATH)
+    assert not result.stuck and result.command.v > 0.8 and abs(result.command.w) < 0.1
+    assert abs(result.poses[result.best, -1, 1]) < 0.05
+
+
+def test_no_chosen_trajectory_touches_the_wall_ahead():
+    """A wall 1.2 m ahead: the trajectories into it are dropped, and the one chosen keeps
+    the exact footprint off every lethal cell at every point (costmap's own check)."""
+    costmap = corridor(wall_x=1.2)
+    planner = DwaPlanner(FOOTPRINT)
+    result = planner.plan(costmap, (0.0, 0.0, 0.0), (0.8, 0.0), PATH)
+    assert not result.valid.all() and result.valid.any()
+    for pose in result.poses[result.best]:
+        assert footprint_cost(costmap, FOOTPRINT, pose) < LETHAL
+    # every trajectory the planner calls valid passes the exact check too
+    for k in np.flatnonzero(result.valid):
+        assert max(footprint_cost(costmap, FOOTPRINT, p) for p in result.poses[k][::5]) < LETHAL
+
+
+def test_boxed_in_it_stops_and_says_stuck():
+    costmap = corridor(wall_x=0.5)
+    costmap.cost[costmap.world_to_cell(np.array([[-0.35, y] for y in np.linspace(-1, 1, 80)]))] \
+        = LETHAL
+    result = DwaPlanner(FOOTPRINT).plan(costmap, (0.0, 0.0, 0.0), (0.0, 0.0), PATH)
+    assert result.stuck and result.command.v == 0.0 and result.command.w == 0.0
+
+
+def test_bad_paths_are_refused():
+    planner = DwaPlanner(FOOTPRINT)
+    with pytest.raises(ValueError, match="path"):
+        planner.plan(corridor(), (0.0, 0.0, 0.0), (0.0, 0.0), np.empty((0, 2)))
+    with pytest.raises(ValueError, match="path"):
+        planner.plan(corridor(), (0.0, 0.0, 0.0), (0.0, 0.0), [[0.0, math.inf]])

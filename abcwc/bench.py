@@ -185,6 +185,37 @@ def bench_dwa() -> dict[str, float]:
     return {"one cycle, median of 50 (ms)": statistics.median(times)}
 
 
+@benchmark("slam", "graph SLAM on the shared benchmark logs: seconds, speed-up over the "
+           "recording, relation errors (deterministic: run once)", repeat=False)
+def bench_slam() -> dict[str, float]:
+    import sys
+
+    from abcwc.mapping.carmen import read_carmen_log
+    from abcwc.mapping.relations import read_relations, relation_errors
+    from abcwc.mapping.slam import run_slam
+    from abcwc.mapping.slam_data import SLAM_DATA_ENV, slam_data_dir
+
+    folder = slam_data_dir()
+    figures: dict[str, float] = {}
+    logs = {"aces": {"max_range": 50.0}, "mit-csail": {},
+            "fr079": {"laser_offset": (0.04, 0.0, 0.0)}}  # the files' own facts
+    for name, facts in logs.items():
+        if not (folder / f"{name}.clf.gz").is_file():
+            print(f"slam: {name} skipped, not in {folder} (set {SLAM_DATA_ENV})",
+                  file=sys.stderr)
+            continue
+        log = read_carmen_log(folder / f"{name}.clf.gz", **facts)
+        result = run_slam(log)
+        errors = relation_errors(result.scan_poses,
+                                 read_relations(folder / f"{name}.relations", log.stamps))
+        figures[f"{name}: seconds"] = result.seconds
+        figures[f"{name}: x faster than recorded"] = (log.stamps[-1] - log.stamps[0]) / \
+            result.seconds
+        figures[f"{name}: translational error (m)"] = errors.translational_mean
+        figures[f"{name}: rotational error (deg)"] = errors.rotational_mean_deg
+    return figures
+
+
 @benchmark("posegraph", "pose-graph LM: the shared SLAM graphs (chi2, s) and a 10,000-pose "
            "simulated graph")
 def bench_posegraph() -> dict[str, float]:

@@ -1,4 +1,4 @@
-"""The ``abcwc`` command: ``demo``, ``bench``, ``posegraph`` and ``course build``.
+"""The ``abcwc`` command: ``demo``, ``bench``, ``posegraph``, ``slam`` and ``course build``.
 
 A mistake in what the user gave (an unknown world or benchmark, a bad number, a missing
 data folder, ``course build`` outside a checkout, ...) ends the command with one line
@@ -72,6 +72,35 @@ def _posegraph(args: argparse.Namespace) -> int:
     return 0
 
 
+def _slam(args: argparse.Namespace) -> int:
+    """Graph SLAM on a CARMEN log: map and trajectory to a folder, relation errors."""
+    import numpy as np
+
+    from abcwc.mapping.carmen import read_carmen_log
+    from abcwc.mapping.map_io import save_map
+    from abcwc.mapping.relations import format_relation_errors, read_relations, relation_errors
+    from abcwc.mapping.slam import render, run_slam
+
+    log = read_carmen_log(args.log, max_range=args.max_range,
+                          laser_offset=None if args.laser_offset is None
+                          else tuple(args.laser_offset))
+    relations = read_relations(args.relations, log.stamps) if args.relations else None
+    result = run_slam(log, progress=not args.quiet)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    save_map(render(log, result.scan_poses, result.keyframes), out / "map.yaml")
+    trajectory = np.column_stack([log.stamps, result.scan_poses])
+    np.savetxt(out / "trajectory.txt", trajectory, fmt="%.6f",
+               header="stamp (s) x (m) y (m) theta (rad): one line per scan")
+    duration = float(log.stamps[-1] - log.stamps[0])
+    print(f"{len(log)} scans, {len(result.keyframes)} keyframes, {result.loops} loop closures "
+          f"in {result.seconds:.1f} s ({duration / result.seconds:.0f}x faster than recorded)")
+    if relations is not None:
+        print(format_relation_errors(relation_errors(result.scan_poses, relations)))
+    print(f"wrote {out / 'map.yaml'}, {out / 'map.pgm'} and {out / 'trajectory.txt'}")
+    return 0
+
+
 def _course_build(args: argparse.Namespace) -> int:
     from abcwc import course
 
@@ -119,6 +148,16 @@ def build_parser() -> argparse.ArgumentParser:
     posegraph.add_argument("--max-iterations", type=int, default=100)
     posegraph.add_argument("--progress", action="store_true", help="show a progress bar")
     posegraph.set_defaults(run=_posegraph)
+
+    slam = commands.add_parser("slam", help="graph SLAM on a CARMEN laser log")
+    slam.add_argument("log", help="CARMEN log (.clf or .clf.gz)")
+    slam.add_argument("--relations", help="benchmark relations file: print the errors")
+    slam.add_argument("--out", default="abcwc-slam", help="folder for map and trajectory")
+    slam.add_argument("--max-range", type=float, help="the laser's maximum range (m)")
+    slam.add_argument("--laser-offset", type=float, nargs=3, metavar=("X", "Y", "THETA"),
+                      help="the laser's pose on the robot (m, m, rad)")
+    slam.add_argument("--quiet", action="store_true", help="no progress bar")
+    slam.set_defaults(run=_slam)
     return parser
 
 

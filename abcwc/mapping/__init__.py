@@ -15,5 +15,7 @@ the submodules:
 * :mod:`~abcwc.mapping.icp`: point-to-line ICP (Censi 2008);
 * :mod:`~abcwc.mapping.g2o`, :mod:`~abcwc.mapping.posegraph` and
   :mod:`~abcwc.mapping.grid_graph`: pose-graph files, the sparse Levenberg-Marquardt
-  over SE(2), and simulated graphs with known truth.
+  over SE(2), and simulated graphs with known truth;
+* :mod:`~abcwc.mapping.slam`: graph SLAM over a laser log (keyframes, scan-matched
+  edges, verified loop closures, the solve, the map).
 """

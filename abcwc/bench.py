@@ -240,18 +240,17 @@ def bench_posegraph() -> dict[str, float]:
     _, result = optimise(simulated.graph)
     figures["simulated 10,000 poses: edges"] = len(simulated.graph.edges)
     figures["simulated 10,000 poses: seconds"] = result.seconds
+    return figures
 
 
 def _slam_data() -> Path:
     """The SLAM benchmark logs: ``ABCWC_SLAM_DATA``, else ``../shared/data/slam`` beside
     the repository."""
-    import os
+    from abcwc.mapping.slam_data import SLAM_DATA_ENV, slam_data_dir
 
-    from abcwc.paths import REPO_ROOT
-
-    path = Path(os.environ.get("ABCWC_SLAM_DATA", REPO_ROOT.parent / "shared/data/slam"))
+    path = slam_data_dir()
     if not path.is_dir():
-        raise ValueError(f"SLAM benchmark data not found at {path} (set ABCWC_SLAM_DATA)")
+        raise ValueError(f"SLAM benchmark data not found at {path} (set {SLAM_DATA_ENV})")
     return path
 
 

@@ -107,6 +107,18 @@ def bench_grid() -> dict[str, float]:
     }
 
 
+def _scattered_obstacles(count: int):  # noqa: ANN202 - a Costmap, imported lazily
+    """A free 500 x 500 costmap at 0.05 m with ``count`` seeded lethal cells."""
+    import numpy as np
+
+    from abcwc.navigation.costmap import LETHAL, Costmap
+
+    rng = np.random.default_rng(0)
+    costmap = Costmap(0.05, 500, 500, default=0)
+    costmap.cost[costmap.world_to_cell(rng.uniform(0, 25, (count, 2)))] = LETHAL
+    return costmap
+
+
 @benchmark("costmap", "costmaps: inflating a 500 x 500 global costmap, and a 5 x 5 m local "
            "window at 0.05 m updated from one 360-beam scan (ms)")
 def bench_costmap() -> dict[str, float]:
@@ -117,14 +129,12 @@ def bench_costmap() -> dict[str, float]:
     from abcwc.navigation.costmap import Costmap
     from abcwc.types import LaserScan
 
-    rng = np.random.default_rng(0)
-    global_map = Costmap(0.05, 500, 500, default=0)
-    global_map.cost[global_map.world_to_cell(rng.uniform(0, 25, (3000, 2)))] = 254
+    global_map = _scattered_obstacles(3000)
     start = time.perf_counter()
     global_map.inflate(0.16, 0.6)
     inflate_ms = (time.perf_counter() - start) * 1000
     scan = LaserScan(-math.pi, 2 * math.pi / 360, 0.15, 12.0,
-                     rng.uniform(0.5, 6.0, 360))
+                     np.random.default_rng(1).uniform(0.5, 6.0, 360))
     start = time.perf_counter()
     local = Costmap.rolling_window((3.0, 4.0, 0.3), 5.0, 0.05)
     local.add_scan(scan, (3.1, 4.0, 0.3), obstacle_range=2.5, raytrace_range=3.0)
@@ -136,15 +146,11 @@ def bench_costmap() -> dict[str, float]:
 @benchmark("planner", "global planner across a 500 x 500 costmap at 0.05 m, corner to corner "
            "(ms): graph, Dijkstra, smoothing")
 def bench_planner() -> dict[str, float]:
-    import numpy as np
     from scipy.sparse.csgraph import dijkstra
 
-    from abcwc.navigation.costmap import Costmap
     from abcwc.navigation.planner import cell_weights, grid_graph, plan, smooth
 
-    rng = np.random.default_rng(0)
-    costmap = Costmap(0.05, 500, 500, default=0)
-    costmap.cost[costmap.world_to_cell(rng.uniform(0, 25, (600, 2)))] = 254
+    costmap = _scattered_obstacles(600)
     costmap.inflate(0.16, 0.6)
     costmap.cost[5, 5] = costmap.cost[495, 495] = 0
     start, goal = costmap.cell_to_world(5, 5), costmap.cell_to_world(495, 495)

@@ -222,6 +222,32 @@ def bench_slam() -> dict[str, float]:
     return figures
 
 
+@benchmark("correlative", "correlative scan matching: one 180-beam scan against a room, "
+           "window +-0.3 m, +-15 deg at 0.03 m (matches per second)")
+def bench_correlative() -> dict[str, float]:
+    import math
+
+    import numpy as np
+
+    from abcwc.geometry import inverse_transform_points
+    from abcwc.mapping.correlative import LikelihoodField, correlative_match
+
+    t = np.linspace(0.0, 1.0, 400, endpoint=False)[:, None]
+    corners = np.array([(0, 0), (8, 0), (8, 4), (4, 4), (4, 6), (0, 6), (0, 0)], float)
+    reference = np.vstack([a + t * (b - a) for a, b in zip(corners[:-1], corners[1:])])
+    truth = np.array([3.0, 2.0, 0.4])
+    local = inverse_transform_points(truth, reference)
+    bearing = np.arctan2(local[:, 1], local[:, 0])
+    scan = local[np.abs(bearing) < math.pi / 2][::2][:180]  # a 180-degree scanner's view
+    field = LikelihoodField(reference, resolution=0.03)
+    guess = truth + np.array([0.2, -0.15, 0.15])
+    start = time.perf_counter()
+    count = 20
+    for _ in range(count):
+        correlative_match(scan, field, guess, window_xy=0.3, window_theta=math.radians(15))
+    return {"matches per second": count / (time.perf_counter() - start)}
+
+
 @benchmark("posegraph", "pose-graph LM: the shared SLAM graphs (chi2, s) and a 10,000-pose "
            "simulated graph")
 def bench_posegraph() -> dict[str, float]:

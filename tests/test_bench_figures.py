@@ -7,7 +7,7 @@ import pytest
 
 from abcwc.bench import BENCHMARKS
 
-QUICK = ["costmap", "dwa", "planner", "grid"]
+QUICK = ["costmap", "dwa", "planner", "grid", "correlative"]
 SLOW = ["sim", "ekf", "nees", "posegraph", "carmen", "slam", "notebooks"]
 
 

@@ -12,7 +12,8 @@ the submodules:
 * :mod:`~abcwc.mapping.carmen` and :mod:`~abcwc.mapping.relations`: real robot logs and
   the relation metric of Kuemmerle et al. (2009); :mod:`~abcwc.mapping.slam_data`: where
   the shared benchmark data lives;
-* :mod:`~abcwc.mapping.icp`: point-to-line ICP (Censi 2008);
+* :mod:`~abcwc.mapping.icp` and :mod:`~abcwc.mapping.correlative`: point-to-line ICP
+  (Censi 2008) and correlative scan matching (Olson 2009);
 * :mod:`~abcwc.mapping.g2o`, :mod:`~abcwc.mapping.posegraph` and
   :mod:`~abcwc.mapping.grid_graph`: pose-graph files, the sparse Levenberg-Marquardt
   over SE(2), and simulated graphs with known truth;

@@ -49,6 +49,16 @@ def _as_poses(pose: PoseLike) -> np.ndarray:
     return array
 
 
+def position_of(point: PoseLike | tuple[float, float], name: str = "point") -> np.ndarray:
+    """The map position ``(x, y)`` (m) of a Pose2D, an ``(x, y)`` or an ``(x, y, theta)``;
+    ValueError naming ``name`` unless it is one of those and finite."""
+    values = np.asarray([point.x, point.y] if isinstance(point, Pose2D) else point,
+                        dtype=float)
+    if values.shape not in ((2,), (3,)) or not np.isfinite(values[:2]).all():
+        raise ValueError(f"{name} must be a finite (x, y) in metres, got {point!r}")
+    return values[:2]
+
+
 def _answer(result: np.ndarray, *inputs: PoseLike) -> Pose2D | np.ndarray:
     """A Pose2D when every input was one, the array otherwise."""
     if all(isinstance(p, Pose2D) for p in inputs):

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from abcwc.geometry import PoseLike, transform_points
+from abcwc.geometry import PoseLike, position_of, transform_points
 from abcwc.mapping.grid import FREE, OCCUPIED, UNKNOWN, GridGeometry
 from abcwc.mapping.raytrace import walk_cells
 from abcwc.mapping.truth import rasterise_walls
@@ -146,7 +146,7 @@ class Costmap(GridGeometry):
         """A ``size`` x ``size`` m local costmap (axis-aligned) centred on ``centre``'s
         position, its origin snapped down to a multiple of the resolution (costmap_2d's
         rolling window: cells keep their place in the map as the window moves)."""
-        x, y = np.asarray(_xy(centre), dtype=float)
+        x, y = position_of(centre, "centre")
         if not (math.isfinite(size) and size > 0):
             raise ValueError(f"size must be a finite number > 0 m, got {size!r}")
         cells = max(1, round(size / resolution))
@@ -232,13 +232,6 @@ class Costmap(GridGeometry):
         self.cost = np.where(layer == NO_INFORMATION, master,
                              np.where(master == NO_INFORMATION, layer,
                                       np.maximum(master, layer))).astype(np.uint8)
-
-
-def _xy(pose: PoseLike) -> tuple[float, float]:
-    values = np.asarray([pose.x, pose.y] if hasattr(pose, "x") else pose, dtype=float)[:2]
-    if not np.isfinite(values).all():
-        raise ValueError(f"pose must be finite, got {pose!r}")
-    return float(values[0]), float(values[1])
 
 
 # --------------------------------------------------------------------- footprint checks

@@ -35,6 +35,7 @@ import numpy as np
 from scipy.sparse import dia_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from abcwc.geometry import position_of
 from abcwc.mapping.raytrace import walk_cells
 from abcwc.navigation.costmap import INSCRIBED, NO_INFORMATION, Costmap
 
@@ -82,9 +83,7 @@ def cell_weights(costmap: Costmap, neutral: float = COST_NEUTRAL, factor: float 
 
 
 def _endpoint(costmap: Costmap, weights: np.ndarray, point: object, name: str) -> tuple[int, int]:
-    xy = np.asarray([point.x, point.y] if hasattr(point, "x") else point, dtype=float)[:2]
-    if xy.shape != (2,) or not np.isfinite(xy).all():
-        raise ValueError(f"{name} must be a finite (x, y) in metres, got {point!r}")
+    xy = position_of(point, name)
     rows, cols = costmap.world_to_cell(xy[None])
     row, col = int(rows[0]), int(cols[0])
     if not costmap.contains(row, col):

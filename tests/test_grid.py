@@ -319,3 +319,13 @@ def test_a_map_of_the_lab_from_true_poses_finds_the_walls_it_saw():
     assert precision >= 0.9 and recall >= 0.85
     assert (truth & seen).sum() >= 0.75 * truth.sum()  # most of the lab was in view
 
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.4])
+def test_xy_to_cell_is_world_to_cell_for_separate_arrays(yaw):
+    grid = OccupancyGrid(0.05, 80, 60, origin=(-1.3, 2.2, yaw))
+    points = np.random.default_rng(3).uniform(-3.0, 6.0, (7, 5, 2))
+    expected = grid.world_to_cell(points)
+    got = grid.xy_to_cell(points[..., 0], points[..., 1])
+    np.testing.assert_array_equal(got[0], expected[0])
+    np.testing.assert_array_equal(got[1], expected[1])

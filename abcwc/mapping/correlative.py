@@ -33,6 +33,7 @@ import numpy as np
 from scipy import ndimage
 
 from abcwc.geometry import wrap_angle
+from abcwc.mapping.grid import GridGeometry
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ class CorrelativeResult:
     window: int
 
 
-class LikelihoodField:
+class LikelihoodField(GridGeometry):
     """The log-likelihood lookup table of reference points ``(M, 2)`` (m) on a grid of
     ``resolution`` m, reaching ``margin`` m beyond them, for point noise ``sigma`` (m)."""
 
@@ -61,13 +62,13 @@ class LikelihoodField:
         for name, value in (("resolution", resolution), ("sigma", sigma), ("margin", margin)):
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0 m, got {value!r}")
-        self.resolution, self.sigma = float(resolution), float(sigma)
-        self.origin = points.min(axis=0) - margin
-        size = np.ceil((points.max(axis=0) + margin - self.origin) / resolution).astype(int) + 1
-        occupied = np.zeros((size[1], size[0]), dtype=bool)
-        cells = np.floor((points - self.origin) / resolution).astype(int)
-        occupied[cells[:, 1], cells[:, 0]] = True
-        distance = ndimage.distance_transform_edt(~occupied) * resolution
+        corner = points.min(axis=0) - margin
+        size = np.ceil((points.max(axis=0) + margin - corner) / resolution).astype(int) + 1
+        super().__init__(resolution, int(size[0]), int(size[1]), (corner[0], corner[1], 0.0))
+        self.sigma = float(sigma)
+        occupied = np.zeros(self.shape, dtype=bool)
+        occupied[self.world_to_cell(points)] = True
+        distance = ndimage.distance_transform_edt(~occupied) * self.resolution
         self.floor = -0.5 * 9.0  # d = 3 sigma
         self.table = np.maximum(-0.5 * (distance / sigma) ** 2, self.floor)
 
@@ -82,9 +83,9 @@ class LikelihoodField:
         ``shifts`` (T, 2 cells): (T,). Points off the table count as the floor."""
         moved = cells[None, :, :] + shifts[:, None, :]
         cols, rows = moved[..., 0], moved[..., 1]
-        inside = (cols >= 0) & (cols < table.shape[1]) & (rows >= 0) & (rows < table.shape[0])
-        values = np.where(inside, table[np.clip(rows, 0, table.shape[0] - 1),
-                                        np.clip(cols, 0, table.shape[1] - 1)], self.floor)
+        values = np.where(self.contains(rows, cols),
+                          table[np.clip(rows, 0, self.height - 1),
+                                np.clip(cols, 0, self.width - 1)], self.floor)
         return values.sum(axis=1)
 
 
@@ -119,7 +120,7 @@ def correlative_match(points: np.ndarray, field: LikelihoodField,
     coarse = np.stack(np.meshgrid(coarse_offsets, coarse_offsets, indexing="xy"),
                       axis=-1).reshape(-1, 2)
     bound = field.bound(factor) if factor > 1 else field.table
-    base = (initial[:2] - field.origin) / res  # the initial translation, in cells
+    base = field.to_cell_units(initial[:2])  # the initial translation, in cells
 
     rotated = []
     bounds = []

@@ -142,6 +142,15 @@ class GridGeometry:
         units = np.floor(self.to_cell_units(points)).astype(np.int64)
         return units[..., 1], units[..., 0]
 
+    def xy_to_cell(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`world_to_cell` for coordinates held in two arrays of one shape (m), without
+        stacking them first (the same numbers; for hot loops over many points)."""
+        if self.origin.theta != 0.0:
+            return self.world_to_cell(np.stack([x, y], axis=-1))
+        cols = np.floor((x - self.origin.x) / self.resolution).astype(np.int64)
+        rows = np.floor((y - self.origin.y) / self.resolution).astype(np.int64)
+        return rows, cols
+
     def cell_to_world(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """Map coordinates ``(..., 2)`` (m) of the centres of cells ``(rows, cols)``."""
         local = np.stack([np.asarray(cols) + 0.5, np.asarray(rows) + 0.5], axis=-1)

@@ -96,15 +96,6 @@ def roll_out(pose: PoseLike, samples: np.ndarray, sim_time: float, steps: int) -
     return np.stack([x, y, theta], axis=-1)
 
 
-def _cells(costmap: Costmap, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rows and columns of map points given as separate x and y arrays (m)."""
-    if costmap.origin.theta != 0.0:
-        return costmap.world_to_cell(np.stack([x, y], axis=-1))
-    cols = np.floor((x - costmap.origin.x) / costmap.resolution).astype(np.int64)
-    rows = np.floor((y - costmap.origin.y) / costmap.resolution).astype(np.int64)
-    return rows, cols
-
-
 class DwaPlanner:
     """base_local_planner's DWA with A.17's parameters by default (``params``), for a
     chair of ``footprint``. Call :meth:`plan` once per control cycle."""
@@ -156,7 +147,7 @@ class DwaPlanner:
         c, s = np.cos(poses[..., 2:]), np.sin(poses[..., 2:])
         cx = poses[..., :1] + c * self._circles[:, 0] - s * self._circles[:, 1]
         cy = poses[..., 1:2] + s * self._circles[:, 0] + c * self._circles[:, 1]
-        rows, cols = _cells(costmap, cx, cy)
+        rows, cols = costmap.xy_to_cell(cx, cy)
         on_map = costmap.contains(rows, cols).reshape(len(samples), -1).all(axis=1)
         rows = np.clip(rows, 0, costmap.height - 1)
         cols = np.clip(cols, 0, costmap.width - 1)
@@ -168,7 +159,7 @@ class DwaPlanner:
         valid = on_map & clear.all(axis=1)
 
         path_distance, goal_distance = self._distance_maps(costmap, path)
-        end_rows, end_cols = _cells(costmap, poses[:, -1, 0], poses[:, -1, 1])
+        end_rows, end_cols = costmap.xy_to_cell(poses[:, -1, 0], poses[:, -1, 1])
         inside = costmap.contains(end_rows, end_cols)
         end_rows = np.clip(end_rows, 0, costmap.height - 1)
         end_cols = np.clip(end_cols, 0, costmap.width - 1)

@@ -72,15 +72,20 @@ class SlamSettings:
 class SlamResult:
     """What a run built: ``keyframes`` (scan index of each), their optimised ``poses``
     (K, 3), the pose ``graph`` (initial poses: the front end's), every scan's ``scan_poses``
-    (N, 3), how many ``loops`` were closed, and the wall-clock ``seconds``."""
+    (N, 3), the wall-clock ``seconds``, and the closed loops as keyframe pairs
+    (``loop_edges``)."""
 
     keyframes: np.ndarray
     poses: np.ndarray
     graph: PoseGraph
     scan_poses: np.ndarray
-    loops: int
     seconds: float
     loop_edges: list[tuple[int, int]] = field(default_factory=list)
+
+    @property
+    def loops(self) -> int:
+        """How many loop closures were kept."""
+        return len(self.loop_edges)
 
 
 def _information(sigma: tuple[float, float, float]) -> np.ndarray:
@@ -164,12 +169,13 @@ def run_slam(log: CarmenLog, settings: SlamSettings | None = None,
             informations.append(loop_info)
             loop_edges.append((candidate, k))
         if closed:
-            poses[: k + 1] = _solve(poses[: k + 1], edges, measurements, informations, s)
+            poses[: k + 1] = _solve(_graph(poses[: k + 1], edges, measurements, informations),
+                                    s)
     graph = _graph(poses, edges, measurements, informations)
     if edges:
-        poses = _solve(poses, edges, measurements, informations, s)
+        poses = _solve(graph, s)
     return SlamResult(keyframes, poses, graph, scan_poses(poses, keyframes, odometry),
-                      len(loop_edges), time.perf_counter() - start_time, loop_edges)
+                      time.perf_counter() - start_time, loop_edges)
 
 
 def _match(points: np.ndarray, submap: np.ndarray, guess: np.ndarray,
@@ -224,9 +230,8 @@ def _graph(poses: np.ndarray, edges: list[tuple[int, int]], measurements: list[n
                      np.array(informations).reshape(-1, 3, 3))
 
 
-def _solve(poses: np.ndarray, edges: list[tuple[int, int]], measurements: list[np.ndarray],
-           informations: list[np.ndarray], s: SlamSettings) -> np.ndarray:
-    graph = _graph(poses, edges, measurements, informations)
+def _solve(graph: PoseGraph, s: SlamSettings) -> np.ndarray:
+    """The graph's poses optimised from where they are, with the settings' kernel."""
     solved, _ = optimise(graph, robust=s.robust, initial="given")
     return solved
 

@@ -199,13 +199,11 @@ def bench_slam() -> dict[str, float]:
     from abcwc.mapping.carmen import read_carmen_log
     from abcwc.mapping.relations import read_relations, relation_errors
     from abcwc.mapping.slam import run_slam
-    from abcwc.mapping.slam_data import SLAM_DATA_ENV, slam_data_dir
+    from abcwc.mapping.slam_data import LOG_FACTS, SLAM_DATA_ENV, slam_data_dir
 
     folder = slam_data_dir()
     figures: dict[str, float] = {}
-    logs = {"aces": {"max_range": 50.0}, "mit-csail": {},
-            "fr079": {"laser_offset": (0.04, 0.0, 0.0)}}  # the files' own facts
-    for name, facts in logs.items():
+    for name, facts in LOG_FACTS.items():
         if not (folder / f"{name}.clf.gz").is_file():
             print(f"slam: {name} skipped, not in {folder} (set {SLAM_DATA_ENV})",
                   file=sys.stderr)
@@ -291,6 +289,7 @@ def _slam_data() -> Path:
 def bench_carmen() -> dict[str, float]:
     from abcwc.mapping.carmen import read_carmen_log
     from abcwc.mapping.icp import match_consecutive_scans
+    from abcwc.mapping.slam_data import LOG_FACTS
 
     data = _slam_data()
     figures: dict[str, float] = {}
@@ -298,7 +297,7 @@ def bench_carmen() -> dict[str, float]:
         start = time.perf_counter()
         log = read_carmen_log(data / f"{name}.clf.gz")
         figures[f"parse {name}.clf.gz ({len(log)} scans): s"] = time.perf_counter() - start
-    aces = read_carmen_log(data / "aces.clf.gz", max_range=50.0)
+    aces = read_carmen_log(data / "aces.clf.gz", **LOG_FACTS["aces"])
     start = time.perf_counter()
     matches = len(match_consecutive_scans(aces, 1000, 1500))
     figures["ICP matches per second, ACES consecutive scans"] = (

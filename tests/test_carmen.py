@@ -20,6 +20,7 @@ from abcwc.mapping.relations import (
     read_relations,
     relation_errors,
 )
+from abcwc.mapping.slam_data import LOG_FACTS
 from tests.slam_data import slam_file
 
 # --- a small log of our own -------------------------------------------------------------
@@ -202,10 +203,9 @@ def test_format_relation_errors_gives_two_lines():
 
 # (log, relations, reader options, README's raw odometry error: m, deg)
 BENCHMARK_LOGS = {
-    "aces": ("aces.clf.gz", "aces.relations", {"max_range": 50.0}, 0.55, 2.2),
-    "mit-csail": ("mit-csail.clf.gz", "mit-csail.relations", {}, 1.7, 5.1),
-    "fr079": ("fr079.clf.gz", "fr079.relations", {"laser_offset": (0.04, 0.0, 0.0)},
-              6.5, 30.0),
+    name: (f"{name}.clf.gz", f"{name}.relations", LOG_FACTS[name], metres, degrees)
+    for name, metres, degrees in (("aces", 0.55, 2.2), ("mit-csail", 1.7, 5.1),
+                                  ("fr079", 6.5, 30.0))
 }
 SHAPES = {"aces": (7374, 180), "mit-csail": (1988, 361), "fr079": (4934, 360)}
 

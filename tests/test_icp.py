@@ -23,6 +23,7 @@ from abcwc.mapping.icp import (
     scan_points,
 )
 from abcwc.mapping.relations import read_relations, relation_errors, relative_pose_errors
+from abcwc.mapping.slam_data import LOG_FACTS
 from abcwc.types import LaserScan
 from tests.slam_data import slam_file
 
@@ -140,7 +141,7 @@ def test_match_scans_takes_laser_scans():
 
 @pytest.fixture(scope="module")
 def aces():
-    log = read_carmen_log(slam_file("aces.clf.gz"), max_range=50.0)
+    log = read_carmen_log(slam_file("aces.clf.gz"), **LOG_FACTS["aces"])
     relations = read_relations(slam_file("aces.relations"), log.stamps)
     nearby = relations.subset(relations.second - relations.first <= 10)
     return log, nearby.subset(np.linspace(0, len(nearby) - 1, 200).astype(int))

@@ -13,6 +13,7 @@ import pytest
 from abcwc.mapping.carmen import read_carmen_log
 from abcwc.mapping.relations import read_relations, relation_errors
 from abcwc.mapping.slam import SlamSettings, run_slam, scan_poses, select_keyframes
+from abcwc.mapping.slam_data import LOG_FACTS
 from tests.slam_data import slam_file
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -40,7 +41,7 @@ def test_scans_ride_on_their_keyframe():
 
 @pytest.fixture(scope="module")
 def aces():
-    log = read_carmen_log(slam_file("aces.clf.gz"), max_range=50.0)
+    log = read_carmen_log(slam_file("aces.clf.gz"), **LOG_FACTS["aces"])
     return log, read_relations(slam_file("aces.relations"), log.stamps)
 
 

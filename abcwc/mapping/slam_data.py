@@ -37,6 +37,16 @@ REFERENCE_GRAPHS = {
 """The figures of the data's README, by graph name."""
 
 
+LOG_FACTS: dict[str, dict] = {
+    "aces": {"max_range": 50.0},
+    "mit-csail": {},
+    "fr079": {"laser_offset": (0.04, 0.0, 0.0)},
+}
+"""What each shared log's FLASER lines do not carry, as ``read_carmen_log`` options (the
+data README: ACES's laser reaches 50 m, FR079's sits 0.04 m ahead of the base). Facts of
+the files, not tuning: the methods take no other per-log setting."""
+
+
 def slam_data_dir() -> Path:
     """``$ABCWC_SLAM_DATA`` if set, else ``shared/data/slam`` beside the checkout (which
     may not exist: callers check)."""

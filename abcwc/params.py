@@ -19,6 +19,8 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from abcwc.paths import data_dir
 
 if sys.version_info >= (3, 11):
@@ -61,6 +63,16 @@ class IrRingParams:
         if len(self.frame_ids) != self.count:
             raise ValueError(f"the IR ring has {self.count} rangers but "
                              f"{len(self.frame_ids)} frame ids: {self.frame_ids!r}")
+
+    @property
+    def mounts(self) -> np.ndarray:
+        """(count, 3): each ranger's ``x, y`` (m) and facing ``yaw`` (rad) in base_link,
+        on the ring of ``ring_radius`` about ``ring_centre``, ranger k facing
+        ``first_angle + 60 k`` degrees."""
+        angles = np.radians(self.first_angle_deg + 60.0 * np.arange(self.count))
+        cx, cy = self.ring_centre
+        return np.column_stack([cx + self.ring_radius * np.cos(angles),
+                                cy + self.ring_radius * np.sin(angles), angles])
 
 
 @dataclass(frozen=True)

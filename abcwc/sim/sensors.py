@@ -119,12 +119,7 @@ class IrRing:
         self.params = params
         self.frame_ids = params.frame_ids  # the SensorFrame.readings key of each ranger
         self._noise = GaussianStream(rng, params.count)
-        angles = np.radians(params.first_angle_deg + 60.0 * np.arange(params.count))
-        cx, cy = params.ring_centre
-        self.mounts = np.column_stack(
-            [cx + params.ring_radius * np.cos(angles), cy + params.ring_radius * np.sin(angles),
-             angles]
-        )
+        self.mounts = params.mounts
 
     def read(self, pose: Pose2D, segments: np.ndarray, circles: np.ndarray) -> np.ndarray:
         """Six readings (m)."""

@@ -115,14 +115,40 @@ def line_normals(points: np.ndarray, neighbours: int = 3,
     return normals
 
 
-def icp(source: np.ndarray, target: np.ndarray,
+@dataclass(frozen=True)
+class IcpTarget:
+    """A target made ready once: its line-like ``points`` (M, 2), their unit ``normals``
+    (M, 2) and a KD-tree over them. Matching many scans against one map (localisation)
+    builds it once instead of once per scan; :func:`icp` takes it in place of points."""
+
+    points: np.ndarray
+    normals: np.ndarray
+    tree: cKDTree
+
+    @classmethod
+    def build(cls, points: np.ndarray, neighbours: int = 3,
+              max_spread: float = 0.5) -> IcpTarget:
+        """The target for ``points`` (N, 2), m: normals by :func:`line_normals`; points
+        without one are dropped. TooFewPairsError when fewer than 3 are left."""
+        points = _as_points(points, "target")
+        normals = line_normals(points, neighbours, max_spread)
+        has_normal = np.all(np.isfinite(normals), axis=1)
+        if has_normal.sum() < 3:
+            raise TooFewPairsError(f"the target has {int(has_normal.sum())} points with a "
+                                   f"line-like neighbourhood; ICP needs at least 3")
+        kept = points[has_normal]
+        return cls(kept, normals[has_normal], cKDTree(kept))
+
+
+def icp(source: np.ndarray, target: np.ndarray | IcpTarget,
         initial: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0), *,
         max_correspondence_distance: float = 0.5, trim_fraction: float = 0.9,
         max_iterations: int = 50, tolerance: float = 1e-6,
         normal_neighbours: int = 3, normal_max_spread: float = 0.5,
         initial_sigma: tuple[float, float, float] | None = None,
         residual_sigma: float = 0.02) -> IcpResult:
-    """Point-to-line ICP of ``source`` ``(N, 2)`` onto ``target`` ``(M, 2)`` (m).
+    """Point-to-line ICP of ``source`` ``(N, 2)`` onto ``target`` ``(M, 2)`` (m), or onto
+    an :class:`IcpTarget` built once (then ``normal_*`` are its own).
 
     ``initial``: the first guess of the source frame's pose in the target frame. With
     ``initial_sigma`` (standard deviations of the guess: m, m, rad) the guess is also a
@@ -132,7 +158,7 @@ def icp(source: np.ndarray, target: np.ndarray,
     method. Raises ValueError for bad shapes or settings, and
     TooFewPairsError (a ValueError) when fewer than 3 pairs survive the outlier rejection.
     """
-    source, target = _as_points(source, "source"), _as_points(target, "target")
+    source = _as_points(source, "source")
     if not max_correspondence_distance > 0:
         raise ValueError(f"max_correspondence_distance must be > 0 m, "
                          f"got {max_correspondence_distance!r}")
@@ -140,13 +166,9 @@ def icp(source: np.ndarray, target: np.ndarray,
         raise ValueError(f"trim_fraction {trim_fraction!r} outside (0, 1]")
     if not (isinstance(max_iterations, int) and max_iterations >= 1):
         raise ValueError(f"max_iterations must be an integer >= 1, got {max_iterations!r}")
-    normals = line_normals(target, normal_neighbours, normal_max_spread)
-    has_normal = np.all(np.isfinite(normals), axis=1)
-    target, normals = target[has_normal], normals[has_normal]
-    if len(target) < 3:
-        raise TooFewPairsError(f"the target has {len(target)} points with a line-like "
-                               f"neighbourhood; ICP needs at least 3")
-    tree = cKDTree(target)
+    if not isinstance(target, IcpTarget):
+        target = IcpTarget.build(target, normal_neighbours, normal_max_spread)
+    tree, normals, target = target.tree, target.normals, target.points
     guess = np.asarray(initial, dtype=float).reshape(3)
     prior = None if initial_sigma is None else residual_sigma / _positive(initial_sigma)
     poses = [guess.copy()]  # one per iteration

@@ -1,0 +1,202 @@
+"""Where the chair is on the map, without ground truth: the EKF corrected by scan matching.
+
+move_base needs the chair's pose in the map frame. amcl gives it in ROS; here the
+chapter 10 filter (:class:`~abcwc.estimation.ekf.ChairEkf`: wheel odometry, the gyro
+and its bias) does the dead reckoning at 50 Hz, and every ``match_interval`` s a lidar
+scan is laid on the map's occupied cells by point-to-line ICP
+(:func:`abcwc.mapping.icp.icp`), started from the filter's estimate. The match is an
+absolute fix of the pose with ICP's covariance (Bengtsson and Baerveldt 2003) plus a
+floor of ``fix_floor`` standard deviations (that covariance is optimistic), and enters
+the filter as chapter 10's fixes did, after two checks:
+
+* the match must be good: at least ``min_fitness`` of the scan's points paired with a
+  wall, their rms point-to-line distance at most ``max_rms`` (people and furniture not
+  on the map are the unpaired rest);
+* the fix must agree with the filter: its Mahalanobis distance
+  ``d^2 = e^T (P + R)^-1 e`` below the chi-square 99.9 % point for 3 degrees of
+  freedom (16.27), so one bad match cannot drag the estimate away.
+
+A corridor fixes the pose across it and not along it: ICP's covariance is long along
+the corridor, and the filter takes from the fix only what it fixes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from abcwc.estimation.ekf import ChairEkf
+from abcwc.geometry import transform_points, wrap_angle, wrap_tick_delta
+from abcwc.mapping.grid import OCCUPIED, GridGeometry
+from abcwc.mapping.icp import IcpTarget, TooFewPairsError, icp, scan_points
+from abcwc.params import ChairParams, default_params
+from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame
+
+GATE_CHI2_3DOF = 16.27
+"""The chi-square distribution's 99.9 % point for 3 degrees of freedom."""
+
+
+def occupied_points(cells: np.ndarray, grid: GridGeometry) -> np.ndarray:
+    """(N, 2) map-frame centres (m) of the ``OCCUPIED`` cells of a trinary map on ``grid``
+    (a built map: its walls known to half a cell)."""
+    rows, cols = np.nonzero(np.asarray(cells) == OCCUPIED)
+    return grid.cell_to_world(rows, cols)
+
+
+def wall_points(walls: np.ndarray, spacing: float = 0.05) -> np.ndarray:
+    """(N, 2) points (m) every ``spacing`` m or closer along wall segments ((K, 4): x1 y1
+    x2 y2), ends included (a world's own walls, known exactly)."""
+    walls = np.asarray(walls, dtype=float).reshape(-1, 4)
+    if not (math.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"spacing must be a finite number > 0 m, got {spacing!r}")
+    lengths = np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1])
+    steps = np.maximum(np.ceil(lengths / spacing).astype(int), 1)
+    wall = np.repeat(np.arange(len(walls)), steps + 1)
+    fraction = np.concatenate([np.linspace(0.0, 1.0, n + 1) for n in steps])
+    start, end = walls[wall, :2], walls[wall, 2:]
+    return start + fraction[:, None] * (end - start)
+
+
+class MapLocalizer:
+    """The chair's map pose from the EKF and scan-to-map matches (module notes).
+
+    ``map_points`` (N, 2, m) are the map's occupied cell centres
+    (:func:`occupied_points`) or its walls (:func:`wall_points`); ``ekf`` the filter,
+    started at the chair's pose with UMBmark's correction and wheel base and the gyro's
+    bias prior as chapter 10 builds it (default: nominal odometry from ``start``, known
+    to 5 cm and 0.02 rad). Call :meth:`observe` with every frame.
+
+    A scan that fits the map well (``fitness >= 0.8``, ``rms <= 0.02`` m) but fails the
+    gate ``relocalise_after`` times in a row means the filter, not the scan, is wrong (a
+    heading error it is too sure of): the pose is then reset to the match, as amcl's
+    recovery re-seeds its particles, and :attr:`relocalisations` counts it.
+    """
+
+    def __init__(self, map_points: np.ndarray, start: Pose2D,
+                 params: ChairParams | None = None, *, ekf: ChairEkf | None = None,
+                 scan_frame: str = LIDAR_FRAME, match_interval: float = 0.5,
+                 min_fitness: float = 0.5, max_rms: float = 0.05,
+                 max_correspondence_distance: float = 0.3,
+                 fix_floor: tuple[float, float, float] = (0.02, 0.02, 0.01),
+                 relocalise_after: int = 5, lost_after: int = 30):
+        self.params = p = params or default_params()
+        self.target = IcpTarget.build(map_points)
+        self.ekf = ekf or ChairEkf(start, p, start_std=(0.05, 0.05, 0.02))
+        if scan_frame not in p.sensors or not hasattr(p.sensors[scan_frame], "mount"):
+            raise ValueError(f"scan_frame must be a scanner's frame id, got {scan_frame!r}")
+        self.scan_frame = scan_frame
+        self.mount = p.sensors[scan_frame].mount  # type: ignore[union-attr]
+        if not (math.isfinite(match_interval) and match_interval >= 0):
+            raise ValueError(f"match_interval must be a finite number >= 0 s, "
+                             f"got {match_interval!r}")
+        self.match_interval = float(match_interval)
+        self.min_fitness, self.max_rms = float(min_fitness), float(max_rms)
+        self.max_correspondence_distance = float(max_correspondence_distance)
+        self.fix_floor = np.diag(np.square(fix_floor))
+        self._per_count = p.distance_per_count * np.asarray(self.ekf.correction, dtype=float)
+        self._ticks: tuple[int, int] | None = None
+        self._t: float | None = None
+        self._last_stamp = -math.inf
+        self._last_match = -math.inf
+        self.lost_after = int(lost_after)
+        self.relocalise_after = int(relocalise_after)
+        self.relocalisations = 0
+        self._disagreeing = 0
+        self.accepted = 0
+        self.rejected = 0
+        self.rejected_in_a_row = 0
+
+    # ------------------------------------------------------------------ estimate
+    @property
+    def pose(self) -> Pose2D:
+        """The estimate of base_link in the map frame."""
+        return self.ekf.pose
+
+    @property
+    def lost(self) -> bool:
+        """True after ``lost_after`` scan matches in a row were refused: the scans no
+        longer fit the map where the estimate says the chair is."""
+        return self.rejected_in_a_row >= self.lost_after
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """3 x 3 covariance (m^2, m rad, rad^2) of :attr:`pose`."""
+        return self.ekf.filter.P[:3, :3].copy()
+
+    @property
+    def velocity(self) -> tuple[float, float]:
+        """The estimated ``(v, w)`` (m/s, rad/s)."""
+        x = self.ekf.filter.x
+        return float(x[3]), float(x[4])
+
+    # ------------------------------------------------------------------ per frame
+    def observe(self, frame: SensorFrame) -> None:
+        """Dead-reckon over the period that ended at ``frame``, then match its scan if a
+        new one has come and ``match_interval`` has passed since the last match."""
+        ticks = (frame.ticks_left, frame.ticks_right)
+        if self._t is not None:
+            dt = frame.t - self._t
+            if dt <= 0:
+                raise ValueError(f"frames must come in time order: {frame.t} s after "
+                                 f"{self._t} s")
+            counts = np.array([wrap_tick_delta(ticks[0] - self._ticks[0]),  # type: ignore[index]
+                               wrap_tick_delta(ticks[1] - self._ticks[1])])  # type: ignore[index]
+            travel = counts * self._per_count
+            self.ekf.update_wheels(float(travel[0]), float(travel[1]), dt)
+            self.ekf.predict(dt)
+        self.ekf.update_gyro(frame.gyro_z)
+        self._ticks, self._t = ticks, frame.t
+        scan = frame.readings.get(self.scan_frame)
+        if (isinstance(scan, LaserScan) and scan.stamp > self._last_stamp
+                and frame.t - self._last_match >= self.match_interval - 1e-9):
+            self._last_stamp = scan.stamp
+            if self.match(scan):
+                self._last_match = frame.t
+
+    def match(self, scan: LaserScan) -> bool:
+        """Lay ``scan`` on the map from the current estimate; True if the fix was taken."""
+        points = transform_points(self.mount, scan_points(scan))
+        if len(points) < 10:
+            return self._refuse()
+        estimate = self.pose
+        guess = np.array([estimate.x, estimate.y, estimate.theta])
+        try:
+            result = icp(points, self.target, guess,
+                         max_correspondence_distance=self.max_correspondence_distance,
+                         max_iterations=20, tolerance=1e-4)
+        except TooFewPairsError:
+            return self._refuse()
+        if result.fitness < self.min_fitness or result.rms > self.max_rms:
+            return self._refuse()
+        fix_cov = result.covariance + self.fix_floor
+        error = result.pose - guess
+        error[2] = wrap_angle(float(error[2]))
+        innovation = self.covariance + fix_cov
+        fix = Pose2D(*map(float, result.pose))
+        if float(error @ np.linalg.solve(innovation, error)) > GATE_CHI2_3DOF:
+            fits_well = result.fitness >= 0.8 and result.rms <= 0.02
+            self._disagreeing = self._disagreeing + 1 if fits_well else 0
+            if self._disagreeing < self.relocalise_after:
+                return self._refuse()
+            self._relocalise(fix, fix_cov)
+        else:
+            self.ekf.update_pose(fix, fix_cov)
+        self.accepted += 1
+        self.rejected_in_a_row = self._disagreeing = 0
+        return True
+
+    def _relocalise(self, fix: Pose2D, fix_cov: np.ndarray) -> None:
+        """Put the pose at ``fix`` with covariance ``fix_cov``, its correlations with
+        the other states dropped; velocity and gyro bias keep their estimates."""
+        x, cov = self.ekf.filter.x, self.ekf.filter.P
+        x[:3] = (fix.x, fix.y, fix.theta)
+        cov[:3, 3:] = 0.0
+        cov[3:, :3] = 0.0
+        cov[:3, :3] = fix_cov
+        self.relocalisations += 1
+
+    def _refuse(self) -> bool:
+        self.rejected += 1
+        self.rejected_in_a_row += 1
+        return False

@@ -14,7 +14,9 @@ Every control cycle (``controller_frequency``, 5 Hz in the thesis's A.17):
    ``angular_sim_granularity`` rad apart (one step count for all pairs: the largest
    any of them needs).
 3. **Scoring.** A trajectory whose footprint comes within reach of a lethal or unknown
-   cell, or leaves the costmap, is dropped. The footprint is checked as three equal
+   cell, or leaves the costmap, is dropped (if the chair is already that near, as after
+   a push or a swerve, a trajectory counts if it never brings it nearer and ends half a
+   cell farther away: it can get away instead of freezing). The footprint is checked as three equal
    circles that cover its rectangle (:func:`covering_circles`), against a distance
    transform of the obstacles: a few centimetres more cautious at the corners than
    base_local_planner's outline check, and one array lookup per circle. The others
@@ -22,9 +24,14 @@ Every control cycle (``controller_frequency``, 5 Hz in the thesis's A.17):
 
        pdist_scale * path_distance + gdist_scale * goal_distance + occdist_scale * max_cost
 
-   with ``path_distance`` and ``goal_distance`` (m) from the trajectory's end to the
-   nearest cell of the global path and to the local goal (the last path point inside
-   the window), and ``max_cost`` the highest costmap value under its footprint. The two
+   with ``path_distance`` and ``goal_distance`` (m) from the nearest cell of the global
+   path and from the local goal (the last path point inside the window), each summed
+   over two points: the trajectory's end, and the point ``heading_lookahead`` (A.17:
+   0.325 m) ahead of it along its final heading (dwa_local_planner's "forward point",
+   its ``goal_front`` and ``alignment`` costs). Without the forward point every turn on
+   the spot ends where it began and scores as standing still, so a chair facing away
+   from its path would never turn to it. ``max_cost`` is the highest costmap value
+   under the footprint. The two
    distance maps are Euclidean distance transforms of the path and goal cells, where
    base_local_planner's ``MapGrid`` runs a wavefront around obstacles: a trajectory
    ending behind a thin wall looks closer here than it is, and the global path, which
@@ -61,6 +68,7 @@ class DwaResult:
     valid: np.ndarray
     cost: np.ndarray
     best: int
+    evading: bool = False  # no trajectory keeps clear of people: the one that stays farthest
 
     @property
     def stuck(self) -> bool:
@@ -129,9 +137,17 @@ class DwaPlanner:
         return np.column_stack([v.ravel(), w.ravel()])
 
     def plan(self, costmap: Costmap, pose: PoseLike, velocity: tuple[float, float],
-             path: np.ndarray) -> DwaResult:
+             path: np.ndarray, people: np.ndarray | None = None,
+             people_horizon: float = 3.0, people_margin: float = 0.1) -> DwaResult:
         """One cycle: the command that follows ``path`` ((K, 2) map points, m, from the
-        global planner) from ``pose`` at ``velocity`` without touching an obstacle."""
+        global planner) from ``pose`` at ``velocity`` without touching an obstacle.
+
+        ``people`` ((M, 5): x, y, vx, vy, radius; m, m/s) are moving discs, each
+        predicted at constant velocity: a trajectory must keep its covering circles
+        ``people_margin`` m clear of every disc along its roll-out, and for
+        ``people_horizon`` s after it (the chair standing at its end), so that it never
+        stops where a walker is about to be. If no trajectory can, the chair takes the
+        one clear of static obstacles that stays farthest from people (``evading``)."""
         path = np.asarray(path, dtype=float).reshape(-1, 2)
         if not len(path) or not np.isfinite(path).all():
             raise ValueError("path must be a non-empty (K, 2) array of finite map points (m)")
@@ -154,25 +170,65 @@ class DwaPlanner:
         clearance = ndimage.distance_transform_edt(costmap.cost < LETHAL) * costmap.resolution
         # a cell's distance is centre to centre: half a cell's diagonal is the slack
         slack = costmap.resolution / math.sqrt(2)
-        clear = (clearance[rows, cols] > self._radius + slack).reshape(len(samples), -1)
+        needed = self._radius + slack
+        here = float(clearance[rows[0, 0], cols[0, 0]].min())  # the chair's circles now
+        if here <= needed:  # already closer than allowed: only ways that get away count
+            along = clearance[rows, cols].min(axis=2).reshape(len(samples), -1)
+            clear = (along >= here) & (along[:, -1:] >= here + costmap.resolution / 2)
+        else:
+            clear = (clearance[rows, cols] > needed).reshape(len(samples), -1)
         worst = costmap.cost[rows, cols].reshape(len(samples), -1).max(axis=1)
         valid = on_map & clear.all(axis=1)
 
         path_distance, goal_distance = self._distance_maps(costmap, path)
-        end_rows, end_cols = costmap.xy_to_cell(poses[:, -1, 0], poses[:, -1, 1])
-        inside = costmap.contains(end_rows, end_cols)
-        end_rows = np.clip(end_rows, 0, costmap.height - 1)
-        end_cols = np.clip(end_cols, 0, costmap.width - 1)
-        cost = (lp.pdist_scale * path_distance[end_rows, end_cols]
-                + lp.gdist_scale * goal_distance[end_rows, end_cols]
-                + lp.occdist_scale * worst)
+        ends = poses[:, -1]
+        fronts = ends[:, :2] + lp.heading_lookahead * np.column_stack(
+            [np.cos(ends[:, 2]), np.sin(ends[:, 2])])
+        cost = np.zeros(len(samples))
+        inside = np.ones(len(samples), dtype=bool)
+        for point in (ends[:, :2], fronts):
+            p_rows, p_cols = costmap.xy_to_cell(point[:, 0], point[:, 1])
+            inside &= costmap.contains(p_rows, p_cols)
+            p_rows = np.clip(p_rows, 0, costmap.height - 1)
+            p_cols = np.clip(p_cols, 0, costmap.width - 1)
+            cost += (lp.pdist_scale * path_distance[p_rows, p_cols]
+                     + lp.gdist_scale * goal_distance[p_rows, p_cols])
+        cost += lp.occdist_scale * worst
         valid &= inside
+        evading = False
+        if people is not None and len(people):
+            gap = self._people_gap(cx, cy, lp.sim_time, steps, np.asarray(people, float),
+                                   people_horizon)
+            clear_of_people = gap > people_margin
+            if valid.any() and not (valid & clear_of_people).any():
+                evading = True
+                best = int(np.argmax(np.where(valid, gap, -np.inf)))
+                return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])),
+                                 samples, poses, valid, np.where(valid, cost, np.inf), best,
+                                 evading)
+            valid &= clear_of_people
         cost = np.where(valid, cost, np.inf)
         if not valid.any():
             return DwaResult(Twist(0.0, 0.0), samples, poses, valid, cost, -1)
         best = int(np.argmin(cost))
         return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])), samples,
-                         poses, valid, cost, best)
+                         poses, valid, cost, best, evading)
+
+    def _people_gap(self, cx: np.ndarray, cy: np.ndarray, sim_time: float, steps: int,
+                    people: np.ndarray, horizon: float) -> np.ndarray:
+        """(S,) the smallest gap (m) between each trajectory's covering circles and the
+        people's discs moved on at their velocities, over the roll-out and then with
+        the chair held at the trajectory's end until ``horizon`` s."""
+        times = np.linspace(0.0, sim_time, steps + 1)
+        held = np.arange(sim_time + 0.25, horizon + 1e-9, 0.25)
+        times = np.concatenate([times, held])
+        cx = np.concatenate([cx, np.repeat(cx[:, -1:], len(held), axis=1)], axis=1)
+        cy = np.concatenate([cy, np.repeat(cy[:, -1:], len(held), axis=1)], axis=1)
+        px = people[:, 0] + people[:, 2] * times[:, None]  # (T, M)
+        py = people[:, 1] + people[:, 3] * times[:, None]
+        distance = np.hypot(cx[..., None] - px[None, :, None, :],
+                            cy[..., None] - py[None, :, None, :])  # (S, T, circles, M)
+        return (distance - people[:, 4] - self._radius).min(axis=(1, 2, 3))
 
     @staticmethod
     def _distance_maps(costmap: Costmap, path: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

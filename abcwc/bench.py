@@ -191,6 +191,35 @@ def bench_dwa() -> dict[str, float]:
     return {"one cycle, median of 50 (ms)": statistics.median(times)}
 
 
+@benchmark("navigator", "the navigator crossing the floor world to the cafeteria with its "
+           "people walking: real-time factor, and ms per control period and per decision")
+def bench_navigator() -> dict[str, float]:
+    from abcwc.navigation.navigator import Navigator
+    from abcwc.sim.base import SimBase
+
+    chair = SimBase("floor", seed=1, lidar=True)
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to("cafeteria")
+    frame, periods, decisions = chair.read(), 0, []
+    thinking = 0.0
+    start = time.perf_counter()
+    while navigator.running and periods < 5000:
+        before = time.perf_counter()
+        command = navigator(frame)
+        spent = time.perf_counter() - before
+        thinking += spent
+        if navigator._decided_at == frame.t:  # noqa: SLF001 - a decision was taken
+            decisions.append(spent * 1000)
+        chair.send(command)
+        frame = chair.step()
+        periods += 1
+    wall = time.perf_counter() - start
+    return {"real-time factor (sim + navigator)": periods * chair.period / wall,
+            "navigator per 20 ms period, mean (ms)": thinking / periods * 1000,
+            "one decision, median (ms)": statistics.median(decisions),
+            "one decision, 95th percentile (ms)": sorted(decisions)[int(0.95 * len(decisions))]}
+
+
 @benchmark("slam", "graph SLAM on the shared benchmark logs: seconds, speed-up over the "
            "recording, relation errors (deterministic: run once)", repeat=False)
 def bench_slam() -> dict[str, float]:

@@ -1,0 +1,232 @@
+"""The navigator's trial: seeded random goals across a world with its people walking.
+
+One chair, one navigator, goal after goal (each starts where the last ended): a goal is
+a random free pose at least ``clearance`` m from any wall that the static map's planner
+can reach from the start. The navigator localises itself (the EKF and scan matching);
+the simulator's ground truth is used only to *judge* it:
+
+* ``reached``: the navigator said succeeded and the chair (true pose) is within the
+  goal tolerance (plus the estimate's error, measured separately);
+* ``collisions``: pymunk contacts of the chair with a wall or a person;
+* ``lethal``: control periods in which the true footprint covers a wall cell of the
+  static map (costmap_2d's footprint check on the true pose);
+* ``closest_person``: the smallest gap (m) between the chair's outline and a person's
+  disc;
+* ``path_ratio``: the distance the chair drove over the straight line from its start to
+  the goal (the optimum no chair can beat where walls are in the way), and over the
+  static map's shortest plan;
+* ``localisation``: the largest distance between the estimate and the truth.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+
+from abcwc.behaviours.base import Status
+from abcwc.estimation.ekf import ChairEkf, gyro_bias_prior, noise_from_models
+from abcwc.experiments.nees import STILL_SECONDS, OdometryCalibration, calibrate_worn_chair
+from abcwc.geometry import transform_points
+from abcwc.navigation.costmap import FREE_SPACE, LETHAL, footprint_cost
+from abcwc.navigation.navigator import Navigator, NavigatorSettings
+from abcwc.navigation.planner import NoPathError, plan
+from abcwc.sim import SimBase
+from abcwc.sim.people import circles_of
+from abcwc.types import Pose2D, Twist
+
+
+@dataclass(frozen=True)
+class GoalOutcome:
+    """One goal's result (module notes for the measures)."""
+
+    goal: Pose2D
+    status: str  # "succeeded" or "failed"
+    reason: str | None
+    seconds: float
+    driven: float  # m, the true path's length
+    straight: float  # m, start to goal
+    planned: float  # m, the static map's shortest plan from the start
+    final_error: float  # m, true position to the goal
+    final_heading_error: float  # rad
+    collisions: int
+    lethal_periods: int
+    closest_person: float  # m, inf without people
+    max_localisation_error: float  # m
+    tolerance: float  # m, the goal tolerance
+
+    @property
+    def reached(self) -> bool:
+        """Succeeded by the navigator's word, and the true position within tolerance."""
+        return self.status == "succeeded" and self.final_error <= self.tolerance
+
+
+@dataclass
+class TrialResult:
+    """All goals of one trial, and its summary figures."""
+
+    outcomes: list[GoalOutcome] = field(default_factory=list)
+    tolerance: float = 0.25
+
+    @property
+    def success_rate(self) -> float:
+        return sum(o.reached for o in self.outcomes) / max(len(self.outcomes), 1)
+
+    @property
+    def collisions(self) -> int:
+        return sum(o.collisions for o in self.outcomes)
+
+    @property
+    def lethal_periods(self) -> int:
+        return sum(o.lethal_periods for o in self.outcomes)
+
+    @property
+    def closest_person(self) -> float:
+        return min((o.closest_person for o in self.outcomes), default=math.inf)
+
+    def summary(self) -> str:
+        reached = [o for o in self.outcomes if o.reached]
+        ratios = np.array([o.driven / o.straight for o in reached if o.straight > 0])
+        planned = np.array([o.driven / o.planned for o in reached if o.planned > 0])
+        seconds = np.array([o.seconds for o in reached])
+        lines = [
+            f"goals: {len(self.outcomes)}, reached {len(reached)} "
+            f"({100 * self.success_rate:.0f} %)",
+            f"collisions: {self.collisions}; periods with the footprint on a wall cell: "
+            f"{self.lethal_periods}",
+            f"closest approach to a person: {self.closest_person:.2f} m",
+        ]
+        if len(reached):
+            lines += [
+                f"time per goal: median {np.median(seconds):.1f} s, max {seconds.max():.1f} s",
+                f"driven / straight line: median {np.median(ratios):.2f}, "
+                f"max {ratios.max():.2f}",
+                f"driven / shortest plan: median {np.median(planned):.2f}, "
+                f"max {planned.max():.2f}",
+                f"final position error: max "
+                f"{max(o.final_error for o in reached):.3f} m; heading max "
+                f"{max(abs(o.final_heading_error) for o in reached):.3f} rad",
+            ]
+        lines.append("largest localisation error: "
+                     f"{max((o.max_localisation_error for o in self.outcomes), default=0):.3f} m")
+        for k, o in enumerate(self.outcomes):
+            if not o.reached:
+                why = o.reason or f"ended {o.final_error:.2f} m from the goal"
+                lines.append(f"goal {k} ({o.goal.x:.1f}, {o.goal.y:.1f}) not reached: {why}")
+        return "\n".join(lines)
+
+
+def random_goals(navigator: Navigator, count: int, seed: int, start: Pose2D,
+                 clearance: float = 0.8) -> list[Pose2D]:
+    """``count`` seeded random goal poses on free floor ``clearance`` m or more from any
+    wall, each reachable from ``start`` on the static map."""
+    static = navigator.static_map
+    from scipy import ndimage
+
+    distance = ndimage.distance_transform_edt(static.cost != LETHAL) * static.resolution
+    rows, cols = np.nonzero((distance >= clearance) & (static.cost == FREE_SPACE))
+    rng = np.random.default_rng(seed)
+    goals: list[Pose2D] = []
+    while len(goals) < count:
+        k = int(rng.integers(len(rows)))
+        x, y = static.cell_to_world(rows[k:k + 1], cols[k:k + 1])[0]
+        theta = float(rng.uniform(-math.pi, math.pi))
+        try:
+            plan(navigator.global_costmap, (start.x, start.y), (x, y))
+        except NoPathError:
+            continue
+        goals.append(Pose2D(float(x), float(y), theta))
+    return goals
+
+
+def _gap_to_people(outline: np.ndarray, circles: np.ndarray) -> float:
+    """Smallest distance (m) from a closed polygon (N, 2) to the edge of discs (M, 3)."""
+    if not len(circles):
+        return math.inf
+    a, b = outline, np.roll(outline, -1, axis=0)
+    centres = circles[:, None, :2]
+    edge = b - a
+    t = np.clip(np.einsum("mnk,nk->mn", centres - a, edge) / np.einsum("nk,nk->n", edge, edge),
+                0.0, 1.0)
+    nearest = a + t[..., None] * edge
+    return float(np.min(np.hypot(*(centres - nearest).transpose(2, 0, 1)).min(axis=1)
+                        - circles[:, 2]))
+
+
+@lru_cache(maxsize=1)
+def _worn_chair_calibration() -> OdometryCalibration:
+    return calibrate_worn_chair()
+
+
+def calibrated_ekf(chair: SimBase, still_seconds: float = STILL_SECONDS) -> ChairEkf:
+    """Chapter 10's filter for ``chair``: UMBmark's correction and wheel base (chapter
+    08, measured on the worn chair in a hall), and the gyro's bias from standing still
+    for ``still_seconds`` first (the chair stands still that long)."""
+    bias, bias_std = gyro_bias_prior(chair.drive(Twist(0.0, 0.0), still_seconds).gyro_z)
+    calibration = _worn_chair_calibration()
+    return ChairEkf(chair.pose, chair.params, start_std=(0.05, 0.05, 0.02),
+                    correction=calibration.correction, wheel_base=calibration.wheel_base,
+                    gyro_bias=bias, gyro_bias_std=bias_std,
+                    noise=noise_from_models(chair.params, residual_rel=calibration.residual_rel,
+                                            horizon=1.0))
+
+
+def run_trial(goals: int = 50, seed: int = 0, world: str = "floor", people: bool = True,
+              settings: NavigatorSettings | None = None, progress: bool = False
+              ) -> TrialResult:
+    """Drive to ``goals`` seeded random goals one after another (module notes)."""
+    chair = SimBase(world, seed=seed, lidar=True, people=people)
+    navigator = Navigator.for_world(chair.world, ekf=calibrated_ekf(chair), settings=settings)
+    targets = random_goals(navigator, goals, seed, chair.pose)
+    result = TrialResult(tolerance=navigator.settings.xy_goal_tolerance)
+    iterator = targets
+    if progress:
+        from tqdm.auto import tqdm
+
+        iterator = tqdm(targets, desc="goals", unit="goal")
+    frame = chair.read()
+    for goal in iterator:
+        result.outcomes.append(_drive_to(chair, navigator, goal, frame))
+        frame = chair.read()
+    return result
+
+
+def _drive_to(chair: SimBase, navigator: Navigator, goal: Pose2D, frame: object) -> GoalOutcome:
+    start, t0, collisions0 = chair.pose, chair.t, chair.collisions
+    try:
+        planned = plan(navigator.global_costmap, (start.x, start.y), (goal.x, goal.y)).length
+    except NoPathError:
+        planned = math.nan
+    navigator.go_to(goal)
+    driven, lethal, closest, worst = 0.0, 0, math.inf, 0.0
+    outline = navigator.footprint.polygon
+    last = start
+    while navigator.running:
+        chair.send(navigator(frame))  # type: ignore[arg-type]
+        frame = chair.step()
+        pose = chair.pose
+        driven += math.hypot(pose.x - last.x, pose.y - last.y)
+        last = pose
+        if footprint_cost(navigator.static_map, navigator.footprint, pose) == LETHAL:
+            lethal += 1
+        if chair.walkers:
+            closest = min(closest, _gap_to_people(transform_points(pose, outline),
+                                                  circles_of(chair.walkers)))
+        estimate = navigator.localizer.pose
+        worst = max(worst, math.hypot(estimate.x - pose.x, estimate.y - pose.y))
+    for _ in range(25):  # let the chair come to rest before the next goal
+        chair.send(navigator(frame))  # type: ignore[arg-type]
+        frame = chair.step()
+    end = chair.pose
+    return GoalOutcome(
+        goal, navigator.status.value, navigator.failure, chair.t - t0, driven,
+        math.hypot(goal.x - start.x, goal.y - start.y), planned,
+        math.hypot(goal.x - end.x, goal.y - end.y),
+        float(np.angle(np.exp(1j * (goal.theta - end.theta)))),
+        chair.collisions - collisions0, lethal, closest, worst,
+        navigator.settings.xy_goal_tolerance)
+
+
+__all__ = ["GoalOutcome", "Status", "TrialResult", "random_goals", "run_trial"]

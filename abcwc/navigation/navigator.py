@@ -1,0 +1,537 @@
+"""The navigator: move_base's job for the chair, from a goal pose to standing on it.
+
+Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigator
+
+1. **localises** with :class:`~abcwc.navigation.localization.MapLocalizer` (the EKF on
+   wheels and gyro, corrected by laying lidar scans on the map; never the simulator's
+   ground truth);
+2. **plans** over the global costmap (the static map plus what the lidar sees now,
+   inflated) with :func:`~abcwc.navigation.planner.plan`, again every
+   ``1 / planner_frequency`` s, and smooths the path;
+3. **follows** it with :class:`~abcwc.navigation.dwa.DwaPlanner` on a rolling local
+   costmap (5 x 5 m) built from the static map and the newest scan, at
+   ``controller_frequency``, keeping out of the way of the people it tracks in the scan
+   (:class:`~abcwc.navigation.people.PeopleTracker`): no trajectory may stop where a
+   walker will be within ``people_horizon`` s;
+4. **turns to the goal's heading** once within ``xy_goal_tolerance``, and succeeds
+   within ``yaw_goal_tolerance``;
+5. **recovers** when no safe trajectory is left or the chair has not moved
+   ``oscillation_distance`` in ``oscillation_timeout`` s (move_base's oscillation
+   check): it waits ``controller_patience`` s for the way to clear (people move), then
+   backs off a little if the IR ring sees the way behind clear, then re-plans; after
+   ``max_recoveries`` recoveries without progress it gives up with the reason.
+
+It ends **succeeded**, or **failed** with a reason a person can act on: the goal is
+off the map or in a wall, no path leads there, the chair is stuck, lost, or out of
+time, or the goal was cancelled. Every command it sends passes through the
+:class:`~abcwc.control.safety.SafetyFilter` inside :meth:`Navigator.__call__`: there is
+no way round it.
+
+:class:`NavigatorSettings` holds A.17's values where they suit a chair with a person
+in it, and says why where they do not.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from abcwc.behaviours.base import BehaviourBase
+from abcwc.control.safety import ComfortLimits, SafetyFilter
+from abcwc.estimation.ekf import ChairEkf
+from abcwc.geometry import compose, position_of, wrap_angle
+from abcwc.mapping.grid import GridGeometry
+from abcwc.navigation.costmap import (
+    FREE_SPACE,
+    LETHAL,
+    NO_INFORMATION,
+    Costmap,
+    chair_footprint,
+)
+from abcwc.navigation.dwa import DwaPlanner
+from abcwc.navigation.localization import MapLocalizer, occupied_points, wall_points
+from abcwc.navigation.people import PeopleTracker, predicted_sweep
+from abcwc.navigation.planner import NoPathError, Path, plan, smooth
+from abcwc.params import ChairParams, default_params, load_navigation_params
+from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame, Twist
+
+if TYPE_CHECKING:
+    from abcwc.sim.world import World
+
+
+@dataclass(frozen=True)
+class NavigatorSettings:
+    """The navigator's settings (m, s, rad, Hz). Where A.17 has a value it is named.
+
+    Changed from A.17, and why:
+
+    * ``xy_goal_tolerance`` 0.25 m (A.17 0.5 m): half a metre leaves a person short of
+      a desk or a door; a quarter is the chair's own half-width.
+    * ``yaw_goal_tolerance`` 0.3 rad (A.17 3 rad, 172 degrees, which is no check at
+      all): arriving facing the desk is the point of a named place.
+    * ``inflation_radius`` 0.7 m (A.17 0.05 m, smaller than one of its own 0.75 m local
+      cells): the planner should keep a chair with a person in it off walls and door
+      frames, not graze them; 0.7 m is beyond the chair's circumscribed radius (0.51 m),
+      as Nav2's tuning guide advises. ``cost_scaling_factor`` stays costmap_2d's 10: a
+      gentler slope (4) makes a doorway so costly that DWA will not turn into it.
+    * ``max_vel_x`` 0.8 m/s (A.17 1.28 m/s, 77 % of full speed) and ``acc_lim_x``
+      0.8 m/s^2 (A.17 3.6 m/s^2, a jolt): within :class:`ComfortLimits`.
+      ``min_vel_x`` 0 (A.17 -1.28): DWA never drives backwards, where the sonar cannot
+      see; backing off is a recovery that checks the IR ring first.
+    * ``max_vel_theta`` 0.8 rad/s (A.17 1.57): half the chair's turn rate.
+    * ``occdist_scale`` 0.01 (A.17 0.1; base_local_planner's default is 0.01): with the
+      wider inflation a doorway's cells cost 30-100, and at 0.1 the obstacle term
+      outweighs metres of path distance, so the chair would not turn into a door.
+    * ``resolution`` 0.05 m for both costmaps (A.17 0.02 global, 0.75 local: a 0.75 m
+      cell is wider than a door's clearance).
+    * recoveries on (A.17 off): a chair that stops for good in a corridor because a
+      person stood in its way has failed its passenger.
+    """
+
+    controller_frequency: float = 5.0  # Hz, A.17
+    planner_frequency: float = 1.0  # Hz, A.17
+    controller_patience: float = 3.0  # s, A.17: wait this long for the way to clear
+    planner_patience: float = 5.0  # s, A.17: fail when no plan is found for this long
+    oscillation_timeout: float = 10.0  # s, A.17
+    oscillation_distance: float = 0.2  # m, A.17
+    xy_goal_tolerance: float = 0.25
+    yaw_goal_tolerance: float = 0.3
+    resolution: float = 0.05
+    local_size: float = 5.0  # m, A.17's 5 x 5 m window
+    obstacle_range: float = 3.0  # m, A.17
+    raytrace_range: float = 3.5  # m, A.17 3.0; a little beyond obstacle_range, as usual
+    inflation_radius: float = 0.7
+    cost_scaling_factor: float = 10.0
+    max_vel_x: float = 0.8
+    acc_lim_x: float = 0.8
+    max_vel_theta: float = 0.8
+    acc_lim_theta: float = 1.5  # rad/s^2, A.17
+    occdist_scale: float = 0.01
+    in_place_turn_rate: float = 0.5  # rad/s when turning to the goal's heading
+    people_horizon: float = 3.0  # s: never stop where a tracked person will be this soon
+    back_off_distance: float = 0.3  # m
+    back_off_speed: float = 0.15  # m/s
+    max_recoveries: int = 4
+    goal_timeout: float | None = None  # s; None: 60 s + 3 x the plan's length / max_vel_x
+
+    def __post_init__(self) -> None:
+        for name, value in vars(self).items():
+            if value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+                    math.isfinite(value) and value > 0):
+                raise ValueError(f"NavigatorSettings.{name} must be a finite number > 0, "
+                                 f"got {value!r}")
+
+
+@dataclass(frozen=True)
+class Feedback:
+    """What the navigator is doing (move_base's feedback, and a little more)."""
+
+    t: float  # s
+    phase: str  # "driving", "turning to the goal's heading", "waiting", "backing off", ...
+    pose: Pose2D  # the estimate the navigator drives by
+    distance_remaining: float  # m along the current plan (inf before the first plan)
+    recoveries: int  # since the chair last made progress
+    safety: str | None  # what the safety filter changed in the last command, if anything
+
+
+class Navigator(BehaviourBase):
+    """Drive to goals on a known map (module notes). A behaviour: call it with every frame.
+
+    ``static_map`` is the global costmap's static layer (``LETHAL`` walls, ``FREE_SPACE``
+    floor, ``NO_INFORMATION`` unknown) and ``localizer`` the pose estimator; most
+    callers build both with :meth:`for_world` or :meth:`for_map`. ``places`` names goals.
+    """
+
+    def __init__(self, static_map: Costmap, localizer: MapLocalizer,
+                 params: ChairParams | None = None, settings: NavigatorSettings | None = None,
+                 limits: ComfortLimits | None = None, places: dict[str, Pose2D] | None = None):
+        self.settings = s = settings or NavigatorSettings()
+        super().__init__(rate_hz=s.controller_frequency)
+        self.params = p = params or default_params()
+        self.static_map = static_map
+        self.localizer = localizer
+        self.places = dict(places or {})
+        self.footprint = chair_footprint(p)
+        self.safety = SafetyFilter(p, limits)
+        nav = load_navigation_params()
+        local = replace(nav.local_planner, max_vel_x=s.max_vel_x, min_vel_x=0.0,
+                        acc_lim_x=s.acc_lim_x, max_vel_theta=s.max_vel_theta,
+                        acc_lim_theta=s.acc_lim_theta, occdist_scale=s.occdist_scale)
+        self.dwa = DwaPlanner(self.footprint, replace(
+            nav, move_base=replace(nav.move_base, controller_frequency=s.controller_frequency)),
+            local)
+        self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
+        self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
+        self._last_scan_stamp = -math.inf
+        self.goal: Pose2D | None = None
+        self.path: Path | None = None
+        self.local_costmap: Costmap | None = None
+        self.feedback: Feedback | None = None
+        self._clear_goal_state()
+
+    # ------------------------------------------------------------------ building
+    @classmethod
+    def for_world(cls, world: World, start: Pose2D | str | None = None,
+                  params: ChairParams | None = None, ekf: ChairEkf | None = None,
+                  settings: NavigatorSettings | None = None,
+                  limits: ComfortLimits | None = None) -> Navigator:
+        """A navigator on a simulated world's walls (the map a survey would draw),
+        starting at ``start`` (a pose or a place name; default the world's start), its
+        localiser's filter ``ekf`` (default: nominal odometry from ``start``)."""
+        settings = settings or NavigatorSettings()
+        start_pose = _place(world.places, start if start is not None else "start")
+        static = Costmap.from_walls(world.walls, settings.resolution)
+        localizer = MapLocalizer(wall_points(world.walls), start_pose, params, ekf=ekf)
+        return cls(static, localizer, params, settings, limits, places=world.places)
+
+    @classmethod
+    def for_map(cls, cells: np.ndarray, grid: GridGeometry, start: Pose2D,
+                params: ChairParams | None = None, ekf: ChairEkf | None = None,
+                settings: NavigatorSettings | None = None,
+                limits: ComfortLimits | None = None) -> Navigator:
+        """A navigator on a built map: trinary ``cells`` (a map file's, or
+        ``OccupancyGrid.trinary()``) on ``grid``, starting at ``start``."""
+        static = Costmap.like(grid)
+        static.add_static(cells)
+        localizer = MapLocalizer(occupied_points(cells, grid), start, params, ekf=ekf)
+        return cls(static, localizer, params, settings, limits)
+
+    # ------------------------------------------------------------------ goals
+    def go_to(self, goal: Pose2D | tuple[float, ...] | str) -> None:
+        """Start driving to ``goal``: a Pose2D, an ``(x, y)`` (any heading will do), an
+        ``(x, y, theta)``, or a place name. A goal off the map, in a wall, or that no
+        path reaches makes the navigator fail at once, saying which."""
+        self.reset()
+        self._clear_goal_state()
+        self.goal = _place(self.places, goal)
+        self._keep_heading = not (isinstance(goal, tuple) and len(goal) == 2)
+        gx, gy = self.goal.x, self.goal.y
+        rows, cols = self.global_costmap.world_to_cell(np.array([[gx, gy]]))
+        if not self.global_costmap.contains(rows[0], cols[0]):
+            self.fail(f"the goal ({gx:.2f}, {gy:.2f}) m is off the map")
+            return
+        cost = int(self.global_costmap.cost[rows[0], cols[0]])
+        if cost == LETHAL or cost == NO_INFORMATION:
+            where = "inside a wall" if cost == LETHAL else "on unknown ground"
+            self.fail(f"the goal ({gx:.2f}, {gy:.2f}) m is {where}")
+            return
+        if cost >= LETHAL - 1:
+            self.fail(f"the goal ({gx:.2f}, {gy:.2f}) m is too close to a wall for the "
+                      f"chair (closer than its inscribed radius)")
+            return
+        self._replan(self.localizer.pose, math.nan)
+
+    def cancel(self) -> None:
+        """Stop driving to the goal (status failed, reason "cancelled")."""
+        super().cancel()
+
+    # ------------------------------------------------------------------ per frame
+    def observe(self, frame: SensorFrame) -> None:
+        """Every frame: the localiser integrates the wheels and gyro and matches scans;
+        each new scan updates the people's tracks."""
+        self.localizer.observe(frame)
+        scan = frame.readings.get(LIDAR_FRAME)
+        if isinstance(scan, LaserScan) and scan.stamp > self._last_scan_stamp:
+            self._last_scan_stamp = scan.stamp
+            sensor = compose(self.localizer.pose, self.params.lidar.mount)
+            self.people.update(scan, sensor, scan.stamp)
+
+    def __call__(self, frame: SensorFrame) -> Twist:
+        wanted = super().__call__(frame)
+        if not isinstance(wanted, Twist):  # pragma: no cover (the navigator sends Twists)
+            raise TypeError("the navigator's commands are Twists")
+        command = self.safety.apply(frame, wanted, self._decided_at)
+        pose = self.localizer.pose
+        self.feedback = Feedback(frame.t, self._phase if self.running else self.status.value,
+                                 pose, self._distance_remaining(pose), self._recoveries,
+                                 self.safety.reason)
+        return command
+
+    def update(self, frame: SensorFrame) -> Twist:
+        """One decision (at ``controller_frequency``)."""
+        self._decided_at = frame.t
+        if self.goal is None:
+            self.fail("no goal: call go_to(goal) first")
+            return Twist(0.0, 0.0)
+        if self._started is None:
+            self._started = frame.t
+            self._anchor = (frame.t, self.localizer.pose)
+        s, pose = self.settings, self.localizer.pose
+        if frame.t - self._started > self._timeout:
+            self.fail(f"out of time: {self._timeout:.0f} s without reaching the goal")
+            return Twist(0.0, 0.0)
+        if self.localizer.lost:
+            self.fail("lost: the last scans no longer fit the map where the chair thinks "
+                      "it is")
+            return Twist(0.0, 0.0)
+
+        if math.hypot(self.goal.x - pose.x, self.goal.y - pose.y) <= s.xy_goal_tolerance:
+            return self._turn_to_goal_heading(pose)
+
+        self.local_costmap = local = self._build_local_costmap(frame, pose)
+        if self._recovery is not None:
+            return self._recover(frame, pose)
+        if frame.t >= self._next_plan or (self._people_moving() and
+                                           frame.t >= self._next_plan - 0.5 / s.planner_frequency):
+            self._replan(pose, frame.t, local)
+            if not self.running:
+                return Twist(0.0, 0.0)
+        if self.path is None:
+            return Twist(0.0, 0.0)
+        result = self.dwa.plan(local, pose, self.localizer.velocity, self._path_ahead(pose),
+                               self.people.moving_discs(), s.people_horizon)
+        if result.evading:
+            self._phase = "keeping out of a person's way"
+            return result.command
+        if not result.stuck and not self._oscillating(frame.t, pose):
+            self._blocked_since = None
+            self._phase = "driving"
+            return result.command
+        return self._blocked(frame, pose)
+
+    # ------------------------------------------------------------------ the parts
+    def _clear_goal_state(self) -> None:
+        self._decided_at: float | None = None
+        self._started: float | None = None
+        self._timeout = math.inf
+        self._next_plan = -math.inf
+        self._plan_failing_since: float | None = None
+        self._blocked_since: float | None = None
+        self._recovery: tuple[str, float, Pose2D] | None = None
+        self._recoveries = 0
+        self._anchor: tuple[float, Pose2D] | None = None
+        self._phase = "planning"
+        self._keep_heading = True
+        self.path = None
+
+    def _inflated(self, cost: np.ndarray, grid: GridGeometry) -> Costmap:
+        costmap = Costmap.like(grid)
+        costmap.cost = cost
+        costmap.inflate(self.footprint.inscribed_radius, self.settings.inflation_radius,
+                        self.settings.cost_scaling_factor)
+        return costmap
+
+    def _with_obstacles(self, marks: np.ndarray) -> Costmap:
+        """The global costmap with the ``marks`` cells lethal and inflated: only the box
+        they span (plus the inflation radius) is inflated again."""
+        grid, reach = self.static_map, math.ceil(self.settings.inflation_radius
+                                                 / self.static_map.resolution) + 1
+        rows, cols = np.nonzero(marks)
+        r0, r1 = max(rows.min() - reach, 0), min(rows.max() + reach + 1, grid.height)
+        c0, c1 = max(cols.min() - reach, 0), min(cols.max() + reach + 1, grid.width)
+        box = np.s_[r0:r1, c0:c1]
+        patch = Costmap(grid.resolution, c1 - c0, r1 - r0, grid.origin)  # cells alone matter
+        patch.cost = np.where(marks[box], LETHAL, grid.cost[box]).astype(np.uint8)
+        patch.inflate(self.footprint.inscribed_radius, self.settings.inflation_radius,
+                      self.settings.cost_scaling_factor)
+        costmap = Costmap.like(grid)
+        costmap.cost = self.global_costmap.cost.copy()
+        costmap.cost[box] = np.maximum(costmap.cost[box], patch.cost)
+        return costmap
+
+    def _build_local_costmap(self, frame: SensorFrame, pose: Pose2D) -> Costmap:
+        """The rolling window: the static map's cells under it, the newest scan's returns
+        marked (and its beams cleared), then inflation."""
+        s = self.settings
+        local = Costmap.rolling_window(pose, s.local_size, s.resolution, default=FREE_SPACE)
+        rows, cols = np.indices(local.shape)
+        centres = local.cell_to_world(rows.ravel(), cols.ravel())
+        g_rows, g_cols = self.static_map.world_to_cell(centres)
+        on_map = self.static_map.contains(g_rows, g_cols)
+        static = np.full(local.shape[0] * local.shape[1], NO_INFORMATION, dtype=np.uint8)
+        static[on_map] = self.static_map.cost[g_rows[on_map], g_cols[on_map]]
+        scan = frame.readings.get(LIDAR_FRAME)
+        if isinstance(scan, LaserScan):
+            sensor = compose(pose, self.params.lidar.mount)
+            local.add_scan(scan, sensor, s.obstacle_range, s.raytrace_range)
+        self._seen = local.cost == LETHAL  # what the scan marks, walls included
+        local.cost = np.maximum(local.cost, static.reshape(local.shape))
+        local.inflate(self.footprint.inscribed_radius, s.inflation_radius,
+                      s.cost_scaling_factor)
+        return local
+
+    def _replan(self, pose: Pose2D, now: float, local: Costmap | None = None) -> None:
+        """A new global plan from ``pose``, around what the newest scan saw."""
+        s = self.settings
+        self._next_plan = (now if math.isfinite(now) else -math.inf) + 1.0 / s.planner_frequency
+        costmap = self.global_costmap
+        if local is not None:
+            marks = np.zeros(self.static_map.shape, dtype=bool)
+            rows, cols = np.nonzero(self._seen)
+            g_rows, g_cols = self.static_map.world_to_cell(local.cell_to_world(rows, cols))
+            inside = self.static_map.contains(g_rows, g_cols)
+            marks[g_rows[inside], g_cols[inside]] = True
+            # where people will walk: the plan goes round it, not into their way
+            marks |= predicted_sweep(self.people.moving_discs(), self.static_map,
+                                     s.people_horizon)
+            marks &= self.static_map.cost != LETHAL
+            if marks.any():
+                costmap = self._with_obstacles(marks)
+        # what the scan sees may be people in a doorway: if it blocks every way, plan on
+        # the map alone and let the local planner wait for them to pass
+        found, reason = None, ""
+        for candidate in dict.fromkeys([costmap, self.global_costmap]):
+            try:
+                found, costmap = self._plan_on(candidate, pose), candidate
+                break
+            except NoPathError as error:
+                reason = str(error)
+        if found is None:
+            if local is None:  # the first plan: the goal cannot be reached from here
+                self.fail(f"no path to the goal: {reason}")
+                return
+            if self._plan_failing_since is None:
+                self._plan_failing_since = now
+            if now - self._plan_failing_since > s.planner_patience:
+                self.fail(f"no path to the goal for "
+                          f"{now - self._plan_failing_since:.0f} s: {reason}")
+            return
+        self._plan_failing_since = None
+        self.path = smooth(costmap, found)
+        if not math.isfinite(self._timeout):
+            self._timeout = (self.settings.goal_timeout if self.settings.goal_timeout
+                             else 60.0 + 3.0 * self.path.length / s.max_vel_x)
+
+    def _people_moving(self) -> bool:
+        """Whether a tracked person is walking: then the plan is renewed twice as often."""
+        discs = self.people.moving_discs()
+        return bool(len(discs)) and bool((np.hypot(discs[:, 2], discs[:, 3]) > 0.2).any())
+
+    def _plan_on(self, costmap: Costmap, pose: Pose2D) -> Path:
+        return plan(costmap, _free_start(costmap, pose), self.goal)
+
+    def _path_ahead(self, pose: Pose2D) -> np.ndarray:
+        """The plan from its point nearest the chair on, as points every resolution."""
+        points = _densify(self.path.points, self.settings.resolution)  # type: ignore[union-attr]
+        nearest = int(np.argmin(np.hypot(points[:, 0] - pose.x, points[:, 1] - pose.y)))
+        return points[nearest:]
+
+    def _distance_remaining(self, pose: Pose2D) -> float:
+        if self.path is None:
+            return math.inf
+        ahead = self._path_ahead(pose)
+        return float(np.hypot(*np.diff(ahead, axis=0).T).sum()
+                     + math.hypot(ahead[0, 0] - pose.x, ahead[0, 1] - pose.y))
+
+    def _turn_to_goal_heading(self, pose: Pose2D) -> Twist:
+        s = self.settings
+        error = float(wrap_angle(self.goal.theta - pose.theta))  # type: ignore[union-attr]
+        if not self._keep_heading or abs(error) <= s.yaw_goal_tolerance:
+            self._phase = "arrived"
+            self.succeed()
+            return Twist(0.0, 0.0)
+        self._phase = "turning to the goal's heading"
+        return Twist(0.0, math.copysign(min(s.in_place_turn_rate, 2.0 * abs(error)), error))
+
+    def _oscillating(self, now: float, pose: Pose2D) -> bool:
+        """move_base's check: not ``oscillation_distance`` from where the chair was
+        ``oscillation_timeout`` s ago. Progress resets the recovery count."""
+        t0, anchor = self._anchor  # type: ignore[misc]
+        s = self.settings
+        if math.hypot(pose.x - anchor.x, pose.y - anchor.y) >= s.oscillation_distance:
+            self._anchor, self._recoveries = (now, pose), 0
+            return False
+        return now - t0 > s.oscillation_timeout
+
+    def _blocked(self, frame: SensorFrame, pose: Pose2D) -> Twist:
+        """No safe trajectory (or no progress): wait for the way to clear, then recover."""
+        s = self.settings
+        if self._blocked_since is None:
+            self._blocked_since = frame.t
+            self._next_plan = frame.t  # plan round what blocks it at the next decision
+        if frame.t - self._blocked_since < s.controller_patience:
+            self._phase = "waiting for the way to clear"
+            return Twist(0.0, 0.0)
+        if self._recoveries >= s.max_recoveries:
+            self.fail(f"stuck: no safe way on after {self._recoveries} recoveries")
+            return Twist(0.0, 0.0)
+        self._recoveries += 1
+        self._blocked_since = None
+        self._anchor = (frame.t, pose)
+        behind, _ = self.safety.clearance(frame, forward=False)
+        if behind > s.back_off_distance + self.safety.braking_distance(s.back_off_speed):
+            self._recovery = ("backing off", frame.t, pose)
+        else:
+            self._recovery = ("turning on the spot", frame.t, pose)
+        return self._recover(frame, pose)
+
+    def _recover(self, frame: SensorFrame, pose: Pose2D) -> Twist:
+        """Back off ``back_off_distance``, or turn a quarter turn towards the plan."""
+        kind, since, start = self._recovery  # type: ignore[misc]
+        s = self.settings
+        self._phase = kind
+        elapsed = frame.t - since
+        if kind == "backing off":
+            moved = math.hypot(pose.x - start.x, pose.y - start.y)
+            if moved < s.back_off_distance and elapsed < 3 * s.back_off_distance / s.back_off_speed:
+                return Twist(-s.back_off_speed, 0.0)
+        elif elapsed < (math.pi / 2) / s.in_place_turn_rate:
+            side = 1.0
+            if self.path is not None and len(self.path.points) > 1:
+                ahead = self._path_ahead(pose)[min(20, len(self._path_ahead(pose)) - 1)]
+                side = math.copysign(1.0, wrap_angle(
+                    math.atan2(ahead[1] - pose.y, ahead[0] - pose.x) - pose.theta))
+            return Twist(0.0, side * s.in_place_turn_rate)
+        self._recovery = None
+        self._next_plan = frame.t
+        return Twist(0.0, 0.0)
+
+
+# ---------------------------------------------------------------------- helpers
+def _place(places: dict[str, Pose2D], goal: object) -> Pose2D:
+    """A goal as a Pose2D: a place's name, a Pose2D, or an (x, y[, theta]) (m, rad)."""
+    if isinstance(goal, str):
+        if goal not in places:
+            known = ", ".join(places) or "none"
+            raise ValueError(f"unknown place {goal!r}; places: {known}")
+        return places[goal]
+    if isinstance(goal, Pose2D):
+        values = (goal.x, goal.y, goal.theta)
+    else:
+        try:
+            values = tuple(float(v) for v in goal)  # type: ignore[union-attr]
+        except (TypeError, ValueError):
+            values = ()
+        if len(values) == 2:
+            values = (*values, 0.0)
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise ValueError(f"a goal is a place name, a Pose2D or a finite (x, y) or "
+                         f"(x, y, theta) in m and rad, got {goal!r}")
+    return Pose2D(*values)
+
+
+def _densify(points: np.ndarray, spacing: float) -> np.ndarray:
+    """Points along the polyline ``points`` (K, 2) no more than ``spacing`` m apart."""
+    if len(points) < 2:
+        return points
+    pieces = [points[:1]]
+    for a, b in zip(points[:-1], points[1:]):
+        n = max(1, math.ceil(math.hypot(*(b - a)) / spacing))
+        pieces.append(a + np.outer(np.arange(1, n + 1) / n, b - a))
+    return np.concatenate(pieces)
+
+
+def _free_start(costmap: Costmap, pose: Pose2D) -> tuple[float, float]:
+    """The chair's position, or, if it lies on an impassable cell (the estimate puts it
+    against a wall), the nearest passable cell within 0.5 m: move_base would refuse to
+    plan, and a chair that brushed a door frame must still find its way on."""
+    xy = position_of(pose, "start")
+    rows, cols = costmap.world_to_cell(xy[None])
+    if costmap.contains(rows[0], cols[0]) and costmap.cost[rows[0], cols[0]] < LETHAL - 1:
+        return float(xy[0]), float(xy[1])
+    reach = max(1, round(0.5 / costmap.resolution))
+    r0, c0 = int(rows[0]), int(cols[0])
+    window = np.s_[max(r0 - reach, 0):r0 + reach + 1, max(c0 - reach, 0):c0 + reach + 1]
+    free = costmap.cost[window] < LETHAL - 1
+    if not free.any():
+        return float(xy[0]), float(xy[1])
+    rr, cc = np.nonzero(free)
+    rr, cc = rr + max(r0 - reach, 0), cc + max(c0 - reach, 0)
+    k = int(np.argmin((rr - r0) ** 2 + (cc - c0) ** 2))
+    x, y = costmap.cell_to_world(np.array([rr[k]]), np.array([cc[k]]))[0]
+    return float(x), float(y)

@@ -1,0 +1,180 @@
+"""The navigator against the simulator's ground truth: it reaches goals localised only by
+its own estimate, ends bad goals with a reason, keeps out of people's way, and every
+command it sends passes the safety filter."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from abcwc.behaviours.base import Status
+from abcwc.geometry import wrap_angle
+from abcwc.navigation.dwa import DwaResult
+from abcwc.navigation.navigator import Navigator
+from abcwc.navigation.people import PeopleTracker
+from abcwc.sim import SimBase
+from abcwc.sim.world import world_from_dict
+from abcwc.types import Pose2D, Twist
+
+
+def _drive(chair: SimBase, navigator: Navigator, seconds: float) -> tuple[float, object]:
+    """Run until the navigator ends (or ``seconds``); the largest localisation error."""
+    frame, worst = chair.read(), 0.0
+    for _ in range(round(seconds / chair.period)):
+        chair.send(navigator(frame))
+        frame = chair.step()
+        truth, estimate = chair.pose, navigator.localizer.pose
+        worst = max(worst, math.hypot(truth.x - estimate.x, truth.y - estimate.y))
+        if not navigator.running:
+            break
+    return worst, frame
+
+
+def test_reaches_the_cafeteria_by_its_own_estimate():
+    chair = SimBase("floor", seed=4, lidar=True, people=False)
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to("cafeteria")
+    worst, frame = _drive(chair, navigator, 120)
+    goal, truth = chair.world.places["cafeteria"], chair.pose
+    assert navigator.status is Status.SUCCEEDED, navigator.failure
+    assert frame.collisions == 0
+    tolerance = navigator.settings.xy_goal_tolerance
+    assert math.hypot(goal.x - truth.x, goal.y - truth.y) <= tolerance
+    assert abs(wrap_angle(goal.theta - truth.theta)) <= navigator.settings.yaw_goal_tolerance + 0.05
+    assert worst < tolerance  # the estimate stays within the goal tolerance all the way
+    assert navigator.localizer.accepted > 50  # the map fixes did the work
+
+
+@pytest.mark.parametrize(("goal", "reason"), [
+    ((9.0, 4.0), "inside a wall"),
+    ((100.0, 100.0), "off the map"),
+    ((29.0, 2.5), "no path to the goal"),  # inside a closed table's outline
+    ((9.1, 4.0), "too close to a wall"),
+])
+def test_impossible_goals_end_at_once_with_the_reason(goal, reason):
+    chair = SimBase("floor", seed=0, lidar=True, people=False)
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to(goal)
+    assert navigator.status is Status.FAILED
+    assert reason in navigator.failure
+    assert navigator(chair.read()) == Twist(0.0, 0.0)
+
+
+def test_bad_goal_values_are_refused():
+    navigator = Navigator.for_world(SimBase("floor", people=False).world)
+    with pytest.raises(ValueError, match="unknown place 'moon'; places: start"):
+        navigator.go_to("moon")
+    with pytest.raises(ValueError, match="finite"):
+        navigator.go_to((math.nan, 1.0))
+    with pytest.raises(ValueError, match="a goal is a place name"):
+        navigator.go_to(object())
+
+
+def test_cancel_stops_the_chair():
+    chair = SimBase("floor", seed=1, lidar=True, people=False)
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to("cafeteria")
+    _drive(chair, navigator, 6)
+    navigator.cancel()
+    assert navigator.status is Status.FAILED and navigator.failure == "cancelled"
+    frame = chair.read()
+    for _ in range(100):
+        chair.send(navigator(frame))
+        frame = chair.step()
+    before = chair.pose
+    for _ in range(25):
+        chair.send(navigator(frame))
+        frame = chair.step()
+    assert math.hypot(chair.pose.x - before.x, chair.pose.y - before.y) < 0.005
+
+
+def test_the_safety_filter_cannot_be_bypassed(monkeypatch):
+    """A local planner gone wrong (always full ahead) still never reaches the wall."""
+    chair = SimBase("floor", seed=2, lidar=True, people=False, errors="ideal")
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to("corridor_east")  # (38, 9): straight east along the corridor
+
+    def reckless(*args, **kwargs) -> DwaResult:
+        return DwaResult(Twist(0.8, 0.0), np.zeros((1, 2)), np.zeros((1, 1, 3)),
+                         np.ones(1, bool), np.zeros(1), 0)
+
+    monkeypatch.setattr(navigator.dwa, "plan", reckless)
+    chair_start = chair.pose
+    frame = chair.read()
+    for _ in range(round(60 / chair.period)):
+        chair.send(navigator(frame))
+        frame = chair.step()
+    assert frame.collisions == 0
+    assert chair.pose.x > chair_start.x + 20  # it did drive, and stopped at the end wall
+    assert navigator.safety.interventions["obstacle"] > 0
+
+
+def test_joystick_takes_over_and_the_navigator_carries_on_after():
+    chair = SimBase("floor", seed=5, lidar=True, people=False)
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to((14.0, 9.0, 0.0))
+    _drive(chair, navigator, 5)
+    chair.set_joystick(fb=chair.params.joystick_centre - 60)  # pull back: reverse
+    frame = chair.read()
+    x_before = chair.pose.x
+    for _ in range(100):
+        chair.send(navigator(frame))
+        frame = chair.step()
+    assert chair.pose.x < x_before  # the person in the seat drove it back
+    assert navigator.safety.reason == "joystick override"
+    chair.release_joystick()
+    _drive(chair, navigator, 60)
+    assert navigator.status is Status.SUCCEEDED, navigator.failure
+
+
+def _corridor(people: list) -> object:
+    return world_from_dict({
+        "name": "corridor", "walls": [[[0, 0], [16, 0], [16, 3], [0, 3], [0, 0]]],
+        "places": {"start": [1.0, 1.5, 0.0], "end": [14.5, 1.5, 0.0]}, "people": people,
+    })
+
+
+def test_a_person_stepping_in_front_is_never_touched():
+    crossing = {"name": "crosser", "path": [[6.0, 2.8], [6.0, 0.2]], "speed": 0.7,
+                "radius": 0.25, "loop": False}
+    chair = SimBase(_corridor([crossing]), seed=6, lidar=True)
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to("end")
+    _, frame = _drive(chair, navigator, 90)
+    assert frame.collisions == 0
+    assert navigator.status is Status.SUCCEEDED, navigator.failure
+
+
+def test_a_person_walking_head_on_down_a_corridor_is_never_touched():
+    oncoming = {"name": "walker", "path": [[15.0, 1.5], [1.0, 1.5]], "speed": 0.9,
+                "radius": 0.25, "loop": False}
+    chair = SimBase(_corridor([oncoming]), seed=7, lidar=True)
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to("end")
+    _, frame = _drive(chair, navigator, 90)
+    assert frame.collisions == 0
+    assert navigator.status is Status.SUCCEEDED, navigator.failure
+
+
+def test_people_tracker_finds_a_walker_and_its_velocity():
+    walker = {"name": "w", "path": [[3.0, 1.0], [3.0, 9.0]], "speed": 0.8, "radius": 0.25,
+              "loop": False}
+    world = world_from_dict({"name": "room", "walls": [[[0, 0], [10, 0], [10, 10], [0, 10],
+                                                        [0, 0]]],
+                             "places": {"start": [7.0, 5.0, math.pi]}, "people": [walker]})
+    chair = SimBase(world, seed=8, lidar=True)
+    navigator = Navigator.for_world(world)
+    tracker = PeopleTracker(navigator.static_map.cost == 254, navigator.static_map)
+    sensor = Pose2D(7.0 + math.cos(math.pi) * chair.params.lidar.mount[0], 5.0, math.pi)
+    last = -1.0
+    for _ in range(150):
+        frame = chair.step()
+        if frame.lidar.stamp > last:
+            last = frame.lidar.stamp
+            tracks = tracker.update(frame.lidar, sensor, frame.lidar.stamp)
+    assert len(tracks) == 1
+    x, y, _ = chair.walkers[0].circle
+    assert np.hypot(*(tracks[0].position - (x, y))) < 0.1
+    assert np.allclose(tracks[0].velocity, (0.0, 0.8), atol=0.1)

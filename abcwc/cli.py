@@ -101,6 +101,18 @@ def _slam(args: argparse.Namespace) -> int:
     return 0
 
 
+def _navtrial(args: argparse.Namespace) -> int:
+    """The navigator's random-goal trial in a world with its people walking."""
+    from abcwc.experiments.navigation_trial import run_trial
+
+    if args.goals < 1:
+        raise ValueError(f"--goals must be at least 1, got {args.goals}")
+    result = run_trial(goals=args.goals, seed=args.seed, world=args.world,
+                       people=not args.no_people, progress=not args.quiet)
+    print(result.summary())
+    return 0
+
+
 def _course_build(args: argparse.Namespace) -> int:
     from abcwc import course
 
@@ -158,6 +170,15 @@ def build_parser() -> argparse.ArgumentParser:
                       help="the laser's pose on the robot (m, m, rad)")
     slam.add_argument("--quiet", action="store_true", help="no progress bar")
     slam.set_defaults(run=_slam)
+
+    navtrial = commands.add_parser(
+        "navtrial", help="drive the navigator to seeded random goals, judged by ground truth")
+    navtrial.add_argument("--goals", type=int, default=50)
+    navtrial.add_argument("--seed", type=int, default=0)
+    navtrial.add_argument("--world", default="floor", help="a world's name or a .json file")
+    navtrial.add_argument("--no-people", action="store_true", help="without walking people")
+    navtrial.add_argument("--quiet", action="store_true", help="no progress bar")
+    navtrial.set_defaults(run=_navtrial)
     return parser
 
 

@@ -82,6 +82,9 @@ USER_ERRORS = {
                                         "`abcwc course build` works on a checkout"),
     "no such solutions folder": (["course", "build", "--solutions", "nope"], {},
                                  "nope: no such directory"),
+    "no goals": (["navtrial", "--goals", "0"], {}, "--goals must be at least 1"),
+    "navtrial in an unknown world": (["navtrial", "--world", "moon"], {},
+                                     "unknown world 'moon'"),
 }
 
 

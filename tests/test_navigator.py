@@ -178,3 +178,15 @@ def test_people_tracker_finds_a_walker_and_its_velocity():
     x, y, _ = chair.walkers[0].circle
     assert np.hypot(*(tracks[0].position - (x, y))) < 0.1
     assert np.allclose(tracks[0].velocity, (0.0, 0.8), atol=0.1)
+
+
+def test_random_goal_trial_with_people_reaches_every_goal_without_a_touch():
+    """A short run of the 50-goal trial (``abcwc navtrial``): seeded goals in the floor
+    world with its people walking, judged by the simulator's ground truth."""
+    from abcwc.experiments.navigation_trial import run_trial
+
+    result = run_trial(goals=3, seed=11)
+    assert result.success_rate == 1.0, result.summary()
+    assert result.collisions == 0 and result.lethal_periods == 0
+    assert all(o.max_localisation_error < o.tolerance for o in result.outcomes)
+    assert all(1.0 <= o.driven / o.straight for o in result.outcomes)

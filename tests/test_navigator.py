@@ -94,7 +94,7 @@ def test_the_safety_filter_cannot_be_bypassed(monkeypatch):
     """A local planner gone wrong (always full ahead) still never reaches the wall."""
     chair = SimBase("floor", seed=2, lidar=True, people=False, errors="ideal")
     navigator = Navigator.for_world(chair.world)
-    navigator.go_to("corridor_east")  # (38, 9): straight east along the corridor
+    navigator.go_to("cafeteria")  # the reckless planner drives straight on, east
 
     def reckless(*args, **kwargs) -> DwaResult:
         return DwaResult(Twist(0.8, 0.0), np.zeros((1, 2)), np.zeros((1, 1, 3)),

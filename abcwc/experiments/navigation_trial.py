@@ -35,6 +35,7 @@ from abcwc.navigation.navigator import Navigator, NavigatorSettings
 from abcwc.navigation.planner import NoPathError, plan
 from abcwc.sim import SimBase
 from abcwc.sim.people import circles_of
+from abcwc.sim.world import PersonSpec
 from abcwc.types import Pose2D, Twist
 
 
@@ -119,19 +120,31 @@ class TrialResult:
 
 
 def random_goals(navigator: Navigator, count: int, seed: int, start: Pose2D,
-                 clearance: float = 0.8) -> list[Pose2D]:
+                 people: tuple[PersonSpec, ...] = (), clearance: float = 0.8,
+                 off_walkways: float = 1.1) -> list[Pose2D]:
     """``count`` seeded random goal poses on free floor ``clearance`` m or more from any
-    wall, each reachable from ``start`` on the static map."""
+    wall and ``off_walkways`` m or more from the lines ``people`` walk, each reachable
+    from ``start`` on the static map. (The simulator's walkers follow their lines blindly
+    and would walk into a chair parked on one, where a real person steps round it: so
+    no goal is set on a walker's line. The chair still crosses and shares them.)"""
     static = navigator.static_map
     from scipy import ndimage
 
     distance = ndimage.distance_transform_edt(static.cost != LETHAL) * static.resolution
     rows, cols = np.nonzero((distance >= clearance) & (static.cost == FREE_SPACE))
+    points = static.cell_to_world(rows, cols)
+    for person in people:
+        path = np.asarray(person.path, dtype=float)
+        ends = np.vstack([path, path[:1]]) if person.loop else path
+        for a, b in zip(ends[:-1], ends[1:]):
+            along = b - a
+            t = np.clip((points - a) @ along / max(along @ along, 1e-12), 0.0, 1.0)
+            gap = np.hypot(*(points - (a + t[:, None] * along)).T)
+            points = points[gap >= off_walkways]
     rng = np.random.default_rng(seed)
     goals: list[Pose2D] = []
     while len(goals) < count:
-        k = int(rng.integers(len(rows)))
-        x, y = static.cell_to_world(rows[k:k + 1], cols[k:k + 1])[0]
+        x, y = points[int(rng.integers(len(points)))]
         theta = float(rng.uniform(-math.pi, math.pi))
         try:
             plan(navigator.global_costmap, (start.x, start.y), (x, y))
@@ -179,7 +192,7 @@ def run_trial(goals: int = 50, seed: int = 0, world: str = "floor", people: bool
     """Drive to ``goals`` seeded random goals one after another (module notes)."""
     chair = SimBase(world, seed=seed, lidar=True, people=people)
     navigator = Navigator.for_world(chair.world, ekf=calibrated_ekf(chair), settings=settings)
-    targets = random_goals(navigator, goals, seed, chair.pose)
+    targets = random_goals(navigator, goals, seed, chair.pose, chair.world.people)
     result = TrialResult(tolerance=navigator.settings.xy_goal_tolerance)
     iterator = targets
     if progress:

@@ -13,8 +13,9 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
    ``controller_frequency``, keeping out of the way of the people it tracks in the scan
    (:class:`~abcwc.navigation.people.PeopleTracker`): no trajectory may stop where a
    walker will be within ``people_horizon`` s;
-4. **turns to the goal's heading** once within ``xy_goal_tolerance``, and succeeds
-   within ``yaw_goal_tolerance``;
+4. **slows down** for the goal (no faster than it can stop from half-way into the
+   tolerance), **turns to the goal's heading** once within ``xy_goal_tolerance``, and
+   succeeds within ``yaw_goal_tolerance``, standing still;
 5. **recovers** when no safe trajectory is left or the chair has not moved
    ``oscillation_distance`` in ``oscillation_timeout`` s (move_base's oscillation
    check): it waits ``controller_patience`` s for the way to clear (people move), then
@@ -50,6 +51,7 @@ from abcwc.navigation.costmap import (
     NO_INFORMATION,
     Costmap,
     chair_footprint,
+    footprint_cost,
 )
 from abcwc.navigation.dwa import DwaPlanner
 from abcwc.navigation.localization import MapLocalizer, occupied_points, wall_points
@@ -291,8 +293,16 @@ class Navigator(BehaviourBase):
         if not result.stuck and not self._oscillating(frame.t, pose):
             self._blocked_since = None
             self._phase = "driving"
-            return result.command
+            return self._slowed_for_the_goal(result.command, pose)
         return self._blocked(frame, pose)
+
+    def _slowed_for_the_goal(self, command: Twist, pose: Pose2D) -> Twist:
+        """At most the speed from which braking at half ``acc_lim_x`` stops the chair
+        half-way into the goal tolerance: it arrives, rather than passes through."""
+        s = self.settings
+        distance = math.hypot(self.goal.x - pose.x, self.goal.y - pose.y)  # type: ignore[union-attr]
+        cap = math.sqrt(s.acc_lim_x * max(distance - s.xy_goal_tolerance / 2, 0.0))
+        return Twist(min(command.v, cap), command.w) if command.v > cap else command
 
     # ------------------------------------------------------------------ the parts
     def _clear_goal_state(self) -> None:
@@ -422,6 +432,9 @@ class Navigator(BehaviourBase):
         s = self.settings
         error = float(wrap_angle(self.goal.theta - pose.theta))  # type: ignore[union-attr]
         if not self._keep_heading or abs(error) <= s.yaw_goal_tolerance:
+            if abs(self.localizer.velocity[0]) > 0.05:  # arrived means standing there
+                self._phase = "stopping at the goal"
+                return Twist(0.0, 0.0)
             self._phase = "arrived"
             self.succeed()
             return Twist(0.0, 0.0)
@@ -454,11 +467,23 @@ class Navigator(BehaviourBase):
         self._blocked_since = None
         self._anchor = (frame.t, pose)
         behind, _ = self.safety.clearance(frame, forward=False)
-        if behind > s.back_off_distance + self.safety.braking_distance(s.back_off_speed):
+        back = compose(pose, (-s.back_off_distance, 0.0, 0.0))
+        if (behind > s.back_off_distance + self.safety.braking_distance(s.back_off_speed)
+                and self._footprint_free([back])):
             self._recovery = ("backing off", frame.t, pose)
-        else:
+        elif self._footprint_free([compose(pose, (0.0, 0.0, side * k * math.pi / 12))
+                                   for k in range(1, 7) for side in (1, -1)]):
             self._recovery = ("turning on the spot", frame.t, pose)
+        else:  # no room to move: keep waiting, which counts as a try
+            self._phase = "waiting: no room to back off or turn"
+            return Twist(0.0, 0.0)
         return self._recover(frame, pose)
+
+    def _footprint_free(self, poses: list) -> bool:
+        """Whether the footprint at every pose is off lethal cells of the local costmap."""
+        local = self.local_costmap
+        return local is not None and all(
+            footprint_cost(local, self.footprint, p) < LETHAL for p in poses)
 
     def _recover(self, frame: SensorFrame, pose: Pose2D) -> Twist:
         """Back off ``back_off_distance``, or turn a quarter turn towards the plan."""

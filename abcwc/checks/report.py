@@ -46,6 +46,7 @@ __all__ = [
     "expect",
     "expect_close",
     "expect_equal",
+    "expect_own",
     "format_value",
     "use_or_fallback",
 ]
@@ -212,6 +213,16 @@ def expect(condition: bool, message: str) -> None:
     """Raise :class:`NotYet` with ``message`` unless ``condition`` holds."""
     if not condition:
         raise NotYet(message)
+
+
+def expect_own(fn: Callable[..., Any], *library_fns: Callable[..., Any]) -> None:
+    """Refuse a function of abcwc's own (the library's, or a check's ``reference_*``)
+    handed to a check in place of the student's: ``that is abcwc's own <name>: write
+    yours``."""
+    module = getattr(fn, "__module__", None) or ""
+    if any(fn is other for other in library_fns) or module == "abcwc" \
+            or module.startswith("abcwc."):
+        raise NotYet(f"that is abcwc's own {_name(fn)}: write yours")
 
 
 def expect_equal(got: Any, expected: Any, *, what: str, ref: str | None = None) -> None:

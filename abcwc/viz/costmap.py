@@ -11,7 +11,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 
-from abcwc.navigation.costmap import INSCRIBED, LETHAL, NO_INFORMATION, Costmap
+from abcwc.navigation.costmap import INSCRIBED, LETHAL, NO_INFORMATION, Costmap, Footprint
 from abcwc.viz._common import new_axes
 
 
@@ -38,4 +38,25 @@ def plot_costmap(costmap: Costmap, ax: Axes | None = None) -> Axes:
     ax.imshow(costmap.cost, cmap=costmap_colours(), vmin=0, vmax=255, origin="lower",
               extent=extent, interpolation="nearest")
     ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal")
+    return ax
+
+
+def plot_footprint(footprint: Footprint, ax: Axes | None = None) -> Axes:
+    """The chair's footprint (base_link, m) with its inscribed and circumscribed circles
+    (costmap_2d's two radii) and the base_link origin."""
+    from matplotlib.patches import Circle, Polygon
+
+    ax = new_axes(ax, (4.5, 4.0))
+    ax.add_patch(Polygon(footprint.polygon, closed=True, facecolor=(0.2, 0.4, 0.8, 0.3),
+                         edgecolor="tab:blue", linewidth=1.5, label="footprint"))
+    for radius, colour, name in ((footprint.inscribed_radius, "tab:cyan", "inscribed"),
+                                 (footprint.circumscribed_radius, "tab:red",
+                                  "circumscribed")):
+        ax.add_patch(Circle((0.0, 0.0), radius, fill=False, edgecolor=colour, linewidth=1.5,
+                            label=f"{name} {radius:.2f} m"))
+    ax.plot([0.0], [0.0], "k+", markersize=10, label="base_link")
+    reach = footprint.circumscribed_radius * 1.15
+    ax.set(xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal", xlabel="x (m)",
+           ylabel="y (m)")
+    ax.legend(loc="lower left", fontsize=8)
     return ax

@@ -57,6 +57,7 @@ class GoalOutcome:
     closest_person: float  # m, inf without people
     max_localisation_error: float  # m
     tolerance: float  # m, the goal tolerance
+    phases: dict[str, float] = field(default_factory=dict)  # s in each navigator phase
 
     @property
     def reached(self) -> bool:
@@ -110,6 +111,15 @@ class TrialResult:
                 f"{max(o.final_error for o in reached):.3f} m; heading max "
                 f"{max(abs(o.final_heading_error) for o in reached):.3f} rad",
             ]
+        totals: dict[str, float] = {}
+        for o in self.outcomes:
+            for phase, seconds in o.phases.items():
+                totals[phase] = totals.get(phase, 0.0) + seconds
+        whole = sum(totals.values()) or 1.0
+        lines.append("time by phase: " + ", ".join(
+            f"{phase} {100 * seconds / whole:.1f} %"
+            for phase, seconds in sorted(totals.items(), key=lambda kv: -kv[1])
+            if seconds >= 0.001 * whole))
         lines.append("largest localisation error: "
                      f"{max((o.max_localisation_error for o in self.outcomes), default=0):.3f} m")
         for k, o in enumerate(self.outcomes):
@@ -214,11 +224,14 @@ def _drive_to(chair: SimBase, navigator: Navigator, goal: Pose2D, frame: object)
         planned = math.nan
     navigator.go_to(goal)
     driven, lethal, closest, worst = 0.0, 0, math.inf, 0.0
+    phases: dict[str, float] = {}
     outline = navigator.footprint.polygon
     last = start
     while navigator.running:
         chair.send(navigator(frame))  # type: ignore[arg-type]
         frame = chair.step()
+        phase = navigator.feedback.phase  # type: ignore[union-attr]
+        phases[phase] = phases.get(phase, 0.0) + chair.period
         pose = chair.pose
         driven += math.hypot(pose.x - last.x, pose.y - last.y)
         last = pose
@@ -239,7 +252,7 @@ def _drive_to(chair: SimBase, navigator: Navigator, goal: Pose2D, frame: object)
         math.hypot(goal.x - end.x, goal.y - end.y),
         float(np.angle(np.exp(1j * (goal.theta - end.theta)))),
         chair.collisions - collisions0, lethal, closest, worst,
-        navigator.settings.xy_goal_tolerance)
+        navigator.settings.xy_goal_tolerance, phases)
 
 
 __all__ = ["GoalOutcome", "Status", "TrialResult", "random_goals", "run_trial"]

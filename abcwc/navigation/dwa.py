@@ -106,15 +106,20 @@ def roll_out(pose: PoseLike, samples: np.ndarray, sim_time: float, steps: int) -
 
 class DwaPlanner:
     """base_local_planner's DWA with A.17's parameters by default (``params``), for a
-    chair of ``footprint``. Call :meth:`plan` once per control cycle."""
+    chair of ``footprint`` grown by ``padding`` m (costmap_2d's ``footprint_padding``:
+    room for the pose estimate's error and for the chair not following the arcs
+    exactly). Call :meth:`plan` once per control cycle."""
 
     def __init__(self, footprint: Footprint, params: NavigationParams | None = None,
-                 local: LocalPlannerParams | None = None):
+                 local: LocalPlannerParams | None = None, padding: float = 0.0):
         nav = params or load_navigation_params()
         self.local = local or nav.local_planner
         self.frequency = nav.move_base.controller_frequency
         self.footprint = footprint
-        self._circles, self._radius = covering_circles(footprint)
+        if not (math.isfinite(padding) and padding >= 0):
+            raise ValueError(f"padding must be a finite number >= 0 m, got {padding!r}")
+        self._circles, radius = covering_circles(footprint)
+        self._radius = radius + padding  # costmap_2d's footprint_padding
         lp = self.local
         if not (lp.vx_samples >= 1 and lp.vtheta_samples >= 1):
             raise ValueError("vx_samples and vtheta_samples must be >= 1")

@@ -56,7 +56,7 @@ from abcwc.navigation.costmap import (
 from abcwc.navigation.dwa import DwaPlanner
 from abcwc.navigation.localization import MapLocalizer, occupied_points, wall_points
 from abcwc.navigation.people import PeopleTracker, predicted_sweep
-from abcwc.navigation.planner import NoPathError, Path, plan, smooth
+from abcwc.navigation.planner import NoPathError, Path, plan
 from abcwc.params import ChairParams, default_params, load_navigation_params
 from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame, Twist
 
@@ -84,6 +84,20 @@ class NavigatorSettings:
       ``min_vel_x`` 0 (A.17 -1.28): DWA never drives backwards, where the sonar cannot
       see; backing off is a recovery that checks the IR ring first.
     * ``max_vel_theta`` 0.8 rad/s (A.17 1.57): half the chair's turn rate.
+    * the plan is handed to DWA as planned, not smoothed (:func:`~abcwc.navigation.
+      planner.smooth`): the smoother cuts corners through cells as costly as the
+      costliest the path crossed, which near a door means the door's own cost, and a
+      chair that cuts towards a door from along the corridor swings its front corner
+      into the frame (measured: a 1 m office door taken from the corridor, a collision
+      and 14 s against the frame smoothed, none as planned).
+    * ``footprint_padding`` 0.05 m (costmap_2d's default 0.01): the localisation's few
+      centimetres and the lag between a command and the wheels (0.25 s) put the chair
+      beside the arc DWA checked; without the margin a front corner clips door frames.
+    * ``forward_prune_distance`` 2 m (Nav2 DWB's default; base_local_planner hands DWA
+      the whole plan inside the window): DWA's goal is the plan's end inside the window,
+      and its distance is measured straight, through walls; where the plan goes out of
+      a door and back along a corridor, a goal at the window's edge lies behind the
+      chair, and standing still scores best. Two metres of plan keep the goal ahead.
     * ``occdist_scale`` 0.01 (A.17 0.1; base_local_planner's default is 0.01): with the
       wider inflation a doorway's cells cost 30-100, and at 0.1 the obstacle term
       outweighs metres of path distance, so the chair would not turn into a door.
@@ -114,6 +128,8 @@ class NavigatorSettings:
     occdist_scale: float = 0.01
     in_place_turn_rate: float = 0.5  # rad/s when turning to the goal's heading
     people_horizon: float = 3.0  # s: never stop where a tracked person will be this soon
+    forward_prune_distance: float = 2.0  # m of plan handed to DWA (Nav2 DWB's default)
+    footprint_padding: float = 0.05  # m round the footprint in DWA's collision check
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.15  # m/s
     max_recoveries: int = 4
@@ -166,7 +182,7 @@ class Navigator(BehaviourBase):
                         acc_lim_theta=s.acc_lim_theta, occdist_scale=s.occdist_scale)
         self.dwa = DwaPlanner(self.footprint, replace(
             nav, move_base=replace(nav.move_base, controller_frequency=s.controller_frequency)),
-            local)
+            local, padding=s.footprint_padding)
         self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
         self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
         self._last_scan_stamp = -math.inf
@@ -285,7 +301,10 @@ class Navigator(BehaviourBase):
                 return Twist(0.0, 0.0)
         if self.path is None:
             return Twist(0.0, 0.0)
-        result = self.dwa.plan(local, pose, self.localizer.velocity, self._path_ahead(pose),
+        ahead = self._path_ahead(pose)
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
+        pruned = ahead[along <= s.forward_prune_distance]
+        result = self.dwa.plan(local, pose, self.localizer.velocity, pruned,
                                self.people.moving_discs(), s.people_horizon)
         if result.evading:
             self._phase = "keeping out of a person's way"
@@ -402,7 +421,7 @@ class Navigator(BehaviourBase):
                           f"{now - self._plan_failing_since:.0f} s: {reason}")
             return
         self._plan_failing_since = None
-        self.path = smooth(costmap, found)
+        self.path = found  # followed as planned: see NavigatorSettings on smoothing
         if not math.isfinite(self._timeout):
             self._timeout = (self.settings.goal_timeout if self.settings.goal_timeout
                              else 60.0 + 3.0 * self.path.length / s.max_vel_x)
@@ -498,7 +517,8 @@ class Navigator(BehaviourBase):
         elif elapsed < (math.pi / 2) / s.in_place_turn_rate:
             side = 1.0
             if self.path is not None and len(self.path.points) > 1:
-                ahead = self._path_ahead(pose)[min(20, len(self._path_ahead(pose)) - 1)]
+                points = self._path_ahead(pose)
+                ahead = points[min(20, len(points) - 1)]
                 side = math.copysign(1.0, wrap_angle(
                     math.atan2(ahead[1] - pose.y, ahead[0] - pose.x) - pose.theta))
             return Twist(0.0, side * s.in_place_turn_rate)

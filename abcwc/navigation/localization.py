@@ -83,8 +83,10 @@ class MapLocalizer:
         self.params = p = params or default_params()
         self.target = IcpTarget.build(map_points)
         self.ekf = ekf or ChairEkf(start, p, start_std=(0.05, 0.05, 0.02))
-        if scan_frame not in p.sensors or not hasattr(p.sensors[scan_frame], "mount"):
-            raise ValueError(f"scan_frame must be a scanner's frame id, got {scan_frame!r}")
+        scanners = [name for name, spec in p.sensors.items() if getattr(spec, "beams", 1) > 1]
+        if scan_frame not in scanners:
+            raise ValueError(f"scan_frame must be a scanner's frame id ({', '.join(scanners)}),"
+                             f" got {scan_frame!r}")
         self.scan_frame = scan_frame
         self.mount = p.sensors[scan_frame].mount  # type: ignore[union-attr]
         if not (math.isfinite(match_interval) and match_interval >= 0):

@@ -1,0 +1,81 @@
+"""Map localisation against the simulator's ground truth: scan matches keep the EKF on
+the map, a filter too sure of a wrong heading is reset by scans that keep disagreeing,
+and a filter far off says it is lost rather than taking fixes that do not fit."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from abcwc.estimation.ekf import ChairEkf
+from abcwc.geometry import wrap_angle
+from abcwc.navigation.localization import MapLocalizer, wall_points
+from abcwc.sim import SimBase
+from abcwc.types import Pose2D, Twist
+
+
+def _drive(chair: SimBase, localizer: MapLocalizer, seconds: float) -> float:
+    """Weave along the floor's corridor, steered by the true pose (the test's harness, not
+    the localiser's business); the largest position error of the estimate (m)."""
+    worst = 0.0
+    for k in range(round(seconds / chair.period)):
+        truth = chair.pose
+        turn = -1.0 * (truth.y - 9.0) - 1.5 * truth.theta + 0.1 * math.sin(k / 60)
+        chair.send(Twist(0.5, max(-0.4, min(0.4, turn))))
+        localizer.observe(chair.step())
+        truth, estimate = chair.pose, localizer.pose
+        worst = max(worst, math.hypot(truth.x - estimate.x, truth.y - estimate.y))
+    return worst
+
+
+def test_wall_points_lie_on_the_walls_and_cover_them():
+    walls = np.array([[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 1.0, 2.0]])
+    points = wall_points(walls, spacing=0.1)
+    assert len(points) == 11 + 21
+    assert np.allclose(points[:11, 1], 0.0) and np.allclose(points[11:, 0], 1.0)
+    assert np.max(np.diff(points[:11, 0])) <= 0.1 + 1e-12
+
+
+def test_scan_matches_hold_the_estimate_where_odometry_alone_drifts():
+    chair = SimBase("floor", seed=21, lidar=True, people=False)  # the worn chair
+    with_map = MapLocalizer(wall_points(chair.world.walls), chair.pose)
+    worst = _drive(chair, with_map, 40.0)
+    chair = SimBase("floor", seed=21, lidar=True, people=False)
+    blind = MapLocalizer(wall_points(chair.world.walls), chair.pose, match_interval=1e9)
+    _drive(chair, blind, 40.0)
+    truth, drifted = chair.pose, blind.pose
+    assert with_map.accepted >= 60 and worst < 0.1
+    assert math.hypot(truth.x - drifted.x, truth.y - drifted.y) > 2 * worst
+
+
+def test_a_filter_sure_of_a_wrong_heading_is_reset_by_the_scans():
+    chair = SimBase("floor", seed=22, lidar=True, people=False)
+    start = chair.pose
+    wrong = Pose2D(start.x, start.y, start.theta + 0.15)  # 8.6 degrees off, and sure of it
+    ekf = ChairEkf(wrong, chair.params, start_std=(0.01, 0.01, 0.002))
+    localizer = MapLocalizer(wall_points(chair.world.walls), start, ekf=ekf)
+    _drive(chair, localizer, 8.0)
+    assert localizer.relocalisations >= 1
+    assert abs(wrap_angle(localizer.pose.theta - chair.pose.theta)) < 0.02
+    assert not localizer.lost
+
+
+def test_a_filter_far_off_the_map_says_it_is_lost():
+    chair = SimBase("floor", seed=23, lidar=True, people=False)
+    start = chair.pose
+    ekf = ChairEkf(Pose2D(start.x + 6.0, start.y - 4.0, start.theta), chair.params)
+    localizer = MapLocalizer(wall_points(chair.world.walls), start, ekf=ekf, lost_after=10)
+    _drive(chair, localizer, 8.0)
+    assert localizer.lost and localizer.accepted == 0
+
+
+def test_bad_settings_are_refused():
+    walls = SimBase("floor", people=False).world.walls
+    with pytest.raises(ValueError, match="scan_frame"):
+        MapLocalizer(wall_points(walls), Pose2D(2, 9, 0), scan_frame="sonar_link")
+    with pytest.raises(ValueError, match="match_interval"):
+        MapLocalizer(wall_points(walls), Pose2D(2, 9, 0), match_interval=math.nan)
+    with pytest.raises(ValueError, match="spacing"):
+        wall_points(walls, spacing=0.0)

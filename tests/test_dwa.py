@@ -102,3 +102,24 @@ def test_bad_paths_are_refused():
         planner.plan(corridor(), (0.0, 0.0, 0.0), (0.0, 0.0), np.empty((0, 2)))
     with pytest.raises(ValueError, match="path"):
         planner.plan(corridor(), (0.0, 0.0, 0.0), (0.0, 0.0), [[0.0, math.inf]])
+
+
+def test_people_are_judged_by_where_the_chair_can_still_stop():
+    """A person standing 2 m straight ahead: the gap the people check reports for
+    driving straight at v equals the closed form of holding v for one control period and
+    the braking delay, then braking at acc_lim_x, i.e. stopping after
+    v (period + delay) + v^2 / (2 a) metres."""
+    delay = 0.4
+    planner = DwaPlanner(FOOTPRINT, braking_delay=delay)
+    lp, period = planner.local, 1.0 / planner.frequency
+    person = np.array([[2.0, 0.0, 0.0, 0.0, 0.25]])
+    samples = np.array([[0.0, 0.0], [0.3, 0.0], [0.6, 0.0]])
+    gaps = planner._people_gap((0.0, 0.0, 0.0), samples, person, horizon=4.0, dt=0.001)
+    circles, _ = covering_circles(FOOTPRINT)
+    front = circles[:, 0].max()  # the foremost covering circle, on the chair's axis
+    for (v, _), gap in zip(samples, gaps):
+        stop = v * (period + delay) + v**2 / (2 * lp.acc_lim_x)
+        assert gap == pytest.approx(2.0 - stop - front - 0.25 - planner._radius, abs=2e-3)
+    # a longer braking delay leaves less room: the same sample is judged nearer
+    quick = DwaPlanner(FOOTPRINT)._people_gap((0.0, 0.0, 0.0), samples, person, 4.0, 0.001)
+    assert quick[2] - gaps[2] == pytest.approx(0.6 * delay, abs=2e-3)

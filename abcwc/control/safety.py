@@ -37,6 +37,7 @@ from __future__ import annotations
 import math
 from collections import Counter
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -85,13 +86,24 @@ class ComfortLimits:
                 raise ValueError(f"ComfortLimits.{name} must be > 0")
 
 
-def range_sensor_rays(params: ChairParams) -> dict[str, tuple[np.ndarray, float, float]]:
-    """Each range sensor's frame id -> (mount ``(x, y, yaw)`` in base_link, half angle
-    (rad) of its cone, minimum range (m)): the sonar and the six IR rangers."""
-    rays = {SONAR_FRAME: (np.asarray(params.sonar.mount, dtype=float),
-                          math.radians(params.sonar.half_angle_deg), params.sonar.min_range)}
+class RangeSensorRay(NamedTuple):
+    """A range sensor on the chair: its ``mount`` ``(x, y, yaw)`` in base_link (m, rad),
+    the ``half_angle`` (rad) of its cone (0 for a ray) and its range limits (m)."""
+
+    mount: np.ndarray
+    half_angle: float
+    min_range: float
+    max_range: float
+
+
+def range_sensor_rays(params: ChairParams) -> dict[str, RangeSensorRay]:
+    """Each range sensor's frame id -> its :class:`RangeSensorRay`: the sonar and the six
+    IR rangers, from chair.toml."""
+    rays = {SONAR_FRAME: RangeSensorRay(np.asarray(params.sonar.mount, dtype=float),
+                                        math.radians(params.sonar.half_angle_deg),
+                                        params.sonar.min_range, params.sonar.max_range)}
     for frame_id, mount in zip(params.ir.frame_ids, params.ir.mounts):
-        rays[frame_id] = (mount, 0.0, params.ir.min_range)
+        rays[frame_id] = RangeSensorRay(mount, 0.0, params.ir.min_range, params.ir.max_range)
     return rays
 
 
@@ -132,7 +144,7 @@ class SafetyFilter:
         behind, as (m from the chair's front or rear edge; the frame id that saw it), or
         ``(inf, None)``. A cone is tried along its axis and both edges."""
         nearest, seen_by = math.inf, None
-        for frame_id, (mount, half_angle, min_range) in self._rays.items():
+        for frame_id, (mount, half_angle, min_range, _) in self._rays.items():
             reading = frame.readings.get(frame_id, math.nan)
             if reading is None or math.isnan(reading) or reading == math.inf:
                 continue

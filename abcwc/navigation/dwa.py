@@ -68,7 +68,8 @@ class DwaResult:
     valid: np.ndarray
     cost: np.ndarray
     best: int
-    evading: bool = False  # no trajectory keeps clear of people: the one that stays farthest
+    evading: bool = False  # no trajectory keeps clear of people: the one farthest from them
+    # and from walls
 
     @property
     def stuck(self) -> bool:
@@ -111,7 +112,8 @@ class DwaPlanner:
     exactly). Call :meth:`plan` once per control cycle."""
 
     def __init__(self, footprint: Footprint, params: NavigationParams | None = None,
-                 local: LocalPlannerParams | None = None, padding: float = 0.0):
+                 local: LocalPlannerParams | None = None, padding: float = 0.0,
+                 braking_delay: float = 0.0):
         nav = params or load_navigation_params()
         self.local = local or nav.local_planner
         self.frequency = nav.move_base.controller_frequency
@@ -120,6 +122,10 @@ class DwaPlanner:
             raise ValueError(f"padding must be a finite number >= 0 m, got {padding!r}")
         self._circles, radius = covering_circles(footprint)
         self._radius = radius + padding  # costmap_2d's footprint_padding
+        if not (math.isfinite(braking_delay) and braking_delay >= 0):
+            raise ValueError(f"braking_delay must be a finite number >= 0 s, "
+                             f"got {braking_delay!r}")
+        self.braking_delay = braking_delay  # s from deciding to stop to full braking
         lp = self.local
         if not (lp.vx_samples >= 1 and lp.vtheta_samples >= 1):
             raise ValueError("vx_samples and vtheta_samples must be >= 1")
@@ -152,7 +158,8 @@ class DwaPlanner:
         ``people_margin`` m clear of every disc along its roll-out, and for
         ``people_horizon`` s after it (the chair standing at its end), so that it never
         stops where a walker is about to be. If no trajectory can, the chair takes the
-        one clear of static obstacles that stays farthest from people (``evading``)."""
+        one clear of static obstacles that stays farthest from people and walls, the
+        nearer of the two counting (``evading``)."""
         path = np.asarray(path, dtype=float).reshape(-1, 2)
         if not len(path) or not np.isfinite(path).all():
             raise ValueError("path must be a non-empty (K, 2) array of finite map points (m)")
@@ -202,13 +209,22 @@ class DwaPlanner:
         valid &= inside
         evading = False
         if people is not None and len(people):
-            gap = self._people_gap(cx, cy, lp.sim_time, steps, np.asarray(people, float),
-                                   people_horizon)
+            gap = self._people_gap(pose, samples, np.asarray(people, float), people_horizon)
             clear_of_people = gap > people_margin
             if valid.any() and not (valid & clear_of_people).any():
+                # the way that keeps farthest from both: a chair that flees a person
+                # only to graze a wall, with the wheels' lag behind the command, hits it
                 evading = True
-                best = int(np.argmax(np.where(valid, gap, -np.inf)))
-                return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])),
+                wall_gap = clearance[rows, cols].reshape(len(samples), -1).min(axis=1) - needed
+                score = np.where(valid, np.minimum(gap, wall_gap), -np.inf)
+                # of the ways about as good as the best, the slowest: standing off
+                # rather than driving on when driving on gains nothing
+                near_best = score >= score.max() - costmap.resolution
+                best = int(np.argmin(np.where(near_best, samples[:, 0], np.inf)))
+                # the slowest of the window is only as slow as one cycle's braking: ask
+                # for a stop on that arc and let the safety filter brake at its limit
+                v = 0.0 if samples[best, 0] <= samples[:, 0].min() else samples[best, 0]
+                return DwaResult(Twist(float(v), float(samples[best, 1])),
                                  samples, poses, valid, np.where(valid, cost, np.inf), best,
                                  evading)
             valid &= clear_of_people
@@ -219,20 +235,41 @@ class DwaPlanner:
         return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])), samples,
                          poses, valid, cost, best, evading)
 
-    def _people_gap(self, cx: np.ndarray, cy: np.ndarray, sim_time: float, steps: int,
-                    people: np.ndarray, horizon: float) -> np.ndarray:
-        """(S,) the smallest gap (m) between each trajectory's covering circles and the
-        people's discs moved on at their velocities, over the roll-out and then with
-        the chair held at the trajectory's end until ``horizon`` s."""
-        times = np.linspace(0.0, sim_time, steps + 1)
-        held = np.arange(sim_time + 0.25, horizon + 1e-9, 0.25)
-        times = np.concatenate([times, held])
-        cx = np.concatenate([cx, np.repeat(cx[:, -1:], len(held), axis=1)], axis=1)
-        cy = np.concatenate([cy, np.repeat(cy[:, -1:], len(held), axis=1)], axis=1)
+    def _people_gap(self, pose: PoseLike, samples: np.ndarray, people: np.ndarray,
+                    horizon: float, dt: float = 0.05) -> np.ndarray:
+        """(S,) the smallest gap (m) between the chair's covering circles and the people's
+        discs (moved on at their velocities) if the chair holds each sample for one
+        control period and ``braking_delay`` s more (the wheels' lag behind a stop
+        command), then brakes to a stop at ``acc_lim_x`` and ``acc_lim_theta`` along its
+        way, and stands until ``horizon`` s.
+
+        A trajectory is judged by whether the chair can still stop clear of everyone
+        after taking it, not by whether it is clear at constant speed: a state from
+        which every way ends in a collision is an inevitable collision state (Fraichard
+        and Asama, "Inevitable collision states - a step towards safer robots?",
+        Advanced Robotics 18(10), 2004), and a chair driving on at constant speed
+        towards a walker's path reaches one before its constant-speed arcs show it."""
+        lp, period = self.local, 1.0 / self.frequency
+        x0, y0, th0 = (pose.x, pose.y, pose.theta) if isinstance(pose, Pose2D) else pose
+        times = np.arange(0.0, max(horizon, period) + dt / 2, dt)  # (T,)
+        braking = np.maximum(times - period - self.braking_delay, 0.0)
+        v = np.maximum(samples[:, :1] - lp.acc_lim_x * braking, 0.0)  # (S, T): v >= 0
+        w = np.sign(samples[:, 1:]) * np.maximum(
+            np.abs(samples[:, 1:]) - lp.acc_lim_theta * braking, 0.0)
+        theta = th0 + np.concatenate([np.zeros((len(samples), 1)),
+                                      np.cumsum(w[:, :-1] * dt, axis=1)], axis=1)
+        step_x, step_y = v * np.cos(theta) * dt, v * np.sin(theta) * dt
+        x = x0 + np.concatenate([np.zeros((len(samples), 1)),
+                                 np.cumsum(step_x[:, :-1], axis=1)], axis=1)
+        y = y0 + np.concatenate([np.zeros((len(samples), 1)),
+                                 np.cumsum(step_y[:, :-1], axis=1)], axis=1)
+        c, s = np.cos(theta)[..., None], np.sin(theta)[..., None]
+        cx = x[..., None] + c * self._circles[:, 0] - s * self._circles[:, 1]  # (S, T, C)
+        cy = y[..., None] + s * self._circles[:, 0] + c * self._circles[:, 1]
         px = people[:, 0] + people[:, 2] * times[:, None]  # (T, M)
         py = people[:, 1] + people[:, 3] * times[:, None]
         distance = np.hypot(cx[..., None] - px[None, :, None, :],
-                            cy[..., None] - py[None, :, None, :])  # (S, T, circles, M)
+                            cy[..., None] - py[None, :, None, :])  # (S, T, C, M)
         return (distance - people[:, 4] - self._radius).min(axis=(1, 2, 3))
 
     @staticmethod

@@ -7,12 +7,15 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
    ground truth);
 2. **plans** over the global costmap (the static map plus what the lidar sees now,
    inflated) with :func:`~abcwc.navigation.planner.plan`, again every
-   ``1 / planner_frequency`` s, and smooths the path;
+   ``1 / planner_frequency`` s;
 3. **follows** it with :class:`~abcwc.navigation.dwa.DwaPlanner` on a rolling local
-   costmap (5 x 5 m) built from the static map and the newest scan, at
-   ``controller_frequency``, keeping out of the way of the people it tracks in the scan
-   (:class:`~abcwc.navigation.people.PeopleTracker`): no trajectory may stop where a
-   walker will be within ``people_horizon`` s;
+   costmap (5 x 5 m) built from the static map, the newest scan and the sonar's and IR
+   rangers' marks that the map does not explain (a
+   :class:`~abcwc.navigation.range_layer.RangeSensorLayer`, as the thesis's costmap
+   took the sonar's beam), at ``controller_frequency``, keeping out of the way of the
+   people it tracks in the scan (:class:`~abcwc.navigation.people.PeopleTracker`): no
+   trajectory may leave the chair unable to stop clear of where a walker will be within
+   ``people_horizon`` s;
 4. **slows down** for the goal (no faster than it can stop from half-way into the
    tolerance), **turns to the goal's heading** once within ``xy_goal_tolerance``, and
    succeeds within ``yaw_goal_tolerance``, standing still;
@@ -39,9 +42,10 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy import ndimage
 
 from abcwc.behaviours.base import BehaviourBase
-from abcwc.control.safety import ComfortLimits, SafetyFilter
+from abcwc.control.safety import ComfortLimits, SafetyFilter, range_sensor_rays
 from abcwc.estimation.ekf import ChairEkf
 from abcwc.geometry import compose, position_of, wrap_angle
 from abcwc.mapping.grid import GridGeometry
@@ -57,6 +61,7 @@ from abcwc.navigation.dwa import DwaPlanner
 from abcwc.navigation.localization import MapLocalizer, occupied_points, wall_points
 from abcwc.navigation.people import PeopleTracker, predicted_sweep
 from abcwc.navigation.planner import NoPathError, Path, plan
+from abcwc.navigation.range_layer import RangeSensorLayer
 from abcwc.params import ChairParams, default_params, load_navigation_params
 from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame, Twist
 
@@ -130,6 +135,8 @@ class NavigatorSettings:
     people_horizon: float = 3.0  # s: never stop where a tracked person will be this soon
     forward_prune_distance: float = 2.0  # m of plan handed to DWA (Nav2 DWB's default)
     footprint_padding: float = 0.05  # m round the footprint in DWA's collision check
+    range_mark_wall_distance: float = 0.25  # m: sonar/IR marks this near a map wall are it
+    range_mark_decay: float = 1.0  # s: time constant of the sonar/IR marks' fading
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.15  # m/s
     max_recoveries: int = 4
@@ -182,9 +189,16 @@ class Navigator(BehaviourBase):
                         acc_lim_theta=s.acc_lim_theta, occdist_scale=s.occdist_scale)
         self.dwa = DwaPlanner(self.footprint, replace(
             nav, move_base=replace(nav.move_base, controller_frequency=s.controller_frequency)),
-            local, padding=s.footprint_padding)
+            local, padding=s.footprint_padding,
+            braking_delay=self.safety.reaction_time + s.acc_lim_x / self.safety.limits.max_jerk)
         self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
         self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
+        self.range_layer = RangeSensorLayer(static_map)
+        self._range_stamp: float | None = None
+        self._rays = range_sensor_rays(p)
+        # m from each map cell to the nearest wall: range marks this near are the wall's
+        self._wall_distance = ndimage.distance_transform_edt(
+            static_map.cost != LETHAL) * static_map.resolution
         self._last_scan_stamp = -math.inf
         self.goal: Pose2D | None = None
         self.path: Path | None = None
@@ -380,9 +394,30 @@ class Navigator(BehaviourBase):
             local.add_scan(scan, sensor, s.obstacle_range, s.raytrace_range)
         self._seen = local.cost == LETHAL  # what the scan marks, walls included
         local.cost = np.maximum(local.cost, static.reshape(local.shape))
+        self._add_range_marks(frame, pose, local)
         local.inflate(self.footprint.inscribed_radius, s.inflation_radius,
                       s.cost_scaling_factor)
         return local
+
+    def _add_range_marks(self, frame: SensorFrame, pose: Pose2D, local: Costmap) -> None:
+        """The sonar's and IR rangers' readings into the range sensor layer, and its marks
+        into the local costmap, except those the map explains (within the echo's zone of
+        a wall: a sonar cone's arc spreads a wall's echo across a doorway)."""
+        if self._range_stamp is not None:
+            self.range_layer.decay(frame.t - self._range_stamp, self.settings.range_mark_decay)
+        self._range_stamp = frame.t
+        self.range_layer.add_frame(frame, pose, self._rays)
+        marks = Costmap.like(local, default=FREE_SPACE)
+        self.range_layer.update_costs(marks)
+        rows, cols = np.nonzero(marks.cost == LETHAL)
+        if not rows.size:
+            return
+        g_rows, g_cols = self.static_map.world_to_cell(local.cell_to_world(rows, cols))
+        on_map = self.static_map.contains(g_rows, g_cols)
+        near_wall = np.zeros(rows.size, dtype=bool)
+        near_wall[on_map] = (self._wall_distance[g_rows[on_map], g_cols[on_map]]
+                             <= self.settings.range_mark_wall_distance)
+        local.cost[rows[~near_wall], cols[~near_wall]] = LETHAL
 
     def _replan(self, pose: Pose2D, now: float, local: Costmap | None = None) -> None:
         """A new global plan from ``pose``, around what the newest scan saw."""

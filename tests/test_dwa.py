@@ -72,6 +72,10 @@ def test_it_follows_the_path_down_a_clear_corridor():
     result = DwaPlanner(FOOTPRINT).plan(corridor(), (0.0, 0.0, 0.0), (0.5, 0.0), PATH)
     assert not result.stuck and result.command.v > 0.8 and abs(result.command.w) < 0.1
     assert abs(result.poses[result.best, -1, 1]) < 0.05
+    total = result.terms["path"] + result.terms["goal"] + result.terms["occupancy"]
+    assert np.allclose(total[result.valid], result.cost[result.valid])
+    lp = DwaPlanner(FOOTPRINT).local  # the occupancy term is the scale times the worst cell
+    assert result.terms["occupancy"].max() <= lp.occdist_scale * 254
 
 
 def test_no_chosen_trajectory_touches_the_wall_ahead():

@@ -190,3 +190,29 @@ def test_random_goal_trial_with_people_reaches_every_goal_without_a_touch():
     assert result.collisions == 0 and result.lethal_periods == 0
     assert all(o.max_localisation_error < o.tolerance for o in result.outcomes)
     assert all(1.0 <= o.driven / o.straight for o in result.outcomes)
+
+
+def test_a_chair_moved_by_hand_finds_its_place_and_carries_on():
+    """Lifted 1 m on and turned 29 degrees mid-way (its wheels turn no tick): the scans
+    stop fitting, the navigator stands, searches round its estimate, finds the place and
+    goes on to the goal."""
+    from tests.test_localization import _kidnap
+
+    chair = SimBase("floor", seed=7, lidar=True, people=False)
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to((16.0, 9.0, 0.0))
+    _drive(chair, navigator, 4)
+    _kidnap(chair, 1.0, 0.0, 0.5)
+    phases = set()
+    frame = chair.read()
+    for _ in range(round(60 / chair.period)):
+        chair.send(navigator(frame))
+        frame = chair.step()
+        phases.add(navigator.feedback.phase)
+        if not navigator.running:
+            break
+    assert "relocalising" in phases
+    assert navigator.status is Status.SUCCEEDED, navigator.failure
+    assert frame.collisions == 0
+    truth, estimate = chair.pose, navigator.localizer.pose
+    assert math.hypot(truth.x - estimate.x, truth.y - estimate.y) < 0.1

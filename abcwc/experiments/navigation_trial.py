@@ -58,6 +58,9 @@ class GoalOutcome:
     max_localisation_error: float  # m
     tolerance: float  # m, the goal tolerance
     phases: dict[str, float] = field(default_factory=dict)  # s in each navigator phase
+    track: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # true poses, 10 Hz
+    estimates: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # the navigator's
+    people: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)))  # (K, M, 2) walkers
 
     @property
     def reached(self) -> bool:
@@ -211,12 +214,19 @@ def run_trial(goals: int = 50, seed: int = 0, world: str = "floor", people: bool
         iterator = tqdm(targets, desc="goals", unit="goal")
     frame = chair.read()
     for goal in iterator:
-        result.outcomes.append(_drive_to(chair, navigator, goal, frame))
+        result.outcomes.append(drive_to_goal(chair, navigator, goal, frame))
         frame = chair.read()
     return result
 
 
-def _drive_to(chair: SimBase, navigator: Navigator, goal: Pose2D, frame: object) -> GoalOutcome:
+def drive_to_goal(chair: SimBase, navigator: Navigator, goal: Pose2D | str,
+                  frame: object | None = None, timeout: float = 600.0) -> GoalOutcome:
+    """Send ``navigator`` to ``goal`` (a pose or a place name) and step the simulated
+    ``chair`` until it ends (or ``timeout`` s), judging it by the ground truth (module
+    notes); the truth, the estimate and the walkers are kept every 0.1 s."""
+    if isinstance(goal, str):
+        goal = chair.world.places[goal]
+    frame = chair.read() if frame is None else frame
     start, t0, collisions0 = chair.pose, chair.t, chair.collisions
     try:
         planned = plan(navigator.global_costmap, (start.x, start.y), (goal.x, goal.y)).length
@@ -227,9 +237,17 @@ def _drive_to(chair: SimBase, navigator: Navigator, goal: Pose2D, frame: object)
     phases: dict[str, float] = {}
     outline = navigator.footprint.polygon
     last = start
-    while navigator.running:
+    track, estimates, people = [], [], []
+    every = max(1, round(0.1 / chair.period))
+    while navigator.running and chair.t - t0 < timeout:
         chair.send(navigator(frame))  # type: ignore[arg-type]
         frame = chair.step()
+        if round((chair.t - t0) / chair.period) % every == 0:
+            truth, estimate = chair.pose, navigator.localizer.pose
+            track.append((truth.x, truth.y, truth.theta))
+            estimates.append((estimate.x, estimate.y, estimate.theta))
+            people.append(circles_of(chair.walkers)[:, :2] if chair.walkers else
+                          np.zeros((0, 2)))
         phase = navigator.feedback.phase  # type: ignore[union-attr]
         phases[phase] = phases.get(phase, 0.0) + chair.period
         pose = chair.pose
@@ -242,6 +260,8 @@ def _drive_to(chair: SimBase, navigator: Navigator, goal: Pose2D, frame: object)
                                                   circles_of(chair.walkers)))
         estimate = navigator.localizer.pose
         worst = max(worst, math.hypot(estimate.x - pose.x, estimate.y - pose.y))
+    if navigator.running:
+        navigator.cancel()
     for _ in range(25):  # let the chair come to rest before the next goal
         chair.send(navigator(frame))  # type: ignore[arg-type]
         frame = chair.step()
@@ -252,7 +272,8 @@ def _drive_to(chair: SimBase, navigator: Navigator, goal: Pose2D, frame: object)
         math.hypot(goal.x - end.x, goal.y - end.y),
         float(np.angle(np.exp(1j * (goal.theta - end.theta)))),
         chair.collisions - collisions0, lethal, closest, worst,
-        navigator.settings.xy_goal_tolerance, phases)
+        navigator.settings.xy_goal_tolerance, phases, np.array(track).reshape(-1, 3),
+        np.array(estimates).reshape(-1, 3), np.array(people))
 
 
-__all__ = ["GoalOutcome", "Status", "TrialResult", "random_goals", "run_trial"]
+__all__ = ["GoalOutcome", "Status", "TrialResult", "drive_to_goal", "random_goals", "run_trial"]

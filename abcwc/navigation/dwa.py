@@ -45,7 +45,7 @@ Every trajectory is rolled out and scored in one set of array operations.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import ndimage
@@ -60,7 +60,9 @@ from abcwc.types import Pose2D, Twist
 class DwaResult:
     """One cycle's outcome: the ``command``; every sampled ``(v, w)`` (S, 2), its
     trajectory ``poses`` (S, T, 3), ``valid`` mask and ``cost`` (inf where invalid), and
-    ``best`` (index into the samples, -1 when ``stuck``)."""
+    ``best`` (index into the samples, -1 when ``stuck``). ``terms`` splits every
+    sample's cost into its three scaled parts, ``"path"``, ``"goal"`` and
+    ``"occupancy"`` (each (S,), summing to ``cost`` where valid)."""
 
     command: Twist
     samples: np.ndarray
@@ -70,6 +72,7 @@ class DwaResult:
     best: int
     evading: bool = False  # no trajectory keeps clear of people: the one farthest from them
     # and from walls
+    terms: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def stuck(self) -> bool:
@@ -196,16 +199,17 @@ class DwaPlanner:
         ends = poses[:, -1]
         fronts = ends[:, :2] + lp.heading_lookahead * np.column_stack(
             [np.cos(ends[:, 2]), np.sin(ends[:, 2])])
-        cost = np.zeros(len(samples))
+        terms = {name: np.zeros(len(samples)) for name in ("path", "goal", "occupancy")}
         inside = np.ones(len(samples), dtype=bool)
         for point in (ends[:, :2], fronts):
             p_rows, p_cols = costmap.xy_to_cell(point[:, 0], point[:, 1])
             inside &= costmap.contains(p_rows, p_cols)
             p_rows = np.clip(p_rows, 0, costmap.height - 1)
             p_cols = np.clip(p_cols, 0, costmap.width - 1)
-            cost += (lp.pdist_scale * path_distance[p_rows, p_cols]
-                     + lp.gdist_scale * goal_distance[p_rows, p_cols])
-        cost += lp.occdist_scale * worst
+            terms["path"] += lp.pdist_scale * path_distance[p_rows, p_cols]
+            terms["goal"] += lp.gdist_scale * goal_distance[p_rows, p_cols]
+        terms["occupancy"] = lp.occdist_scale * worst
+        cost = terms["path"] + terms["goal"] + terms["occupancy"]
         valid &= inside
         evading = False
         if people is not None and len(people):
@@ -226,14 +230,14 @@ class DwaPlanner:
                 v = 0.0 if samples[best, 0] <= samples[:, 0].min() else samples[best, 0]
                 return DwaResult(Twist(float(v), float(samples[best, 1])),
                                  samples, poses, valid, np.where(valid, cost, np.inf), best,
-                                 evading)
+                                 evading, terms)
             valid &= clear_of_people
         cost = np.where(valid, cost, np.inf)
         if not valid.any():
-            return DwaResult(Twist(0.0, 0.0), samples, poses, valid, cost, -1)
+            return DwaResult(Twist(0.0, 0.0), samples, poses, valid, cost, -1, terms=terms)
         best = int(np.argmin(cost))
         return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])), samples,
-                         poses, valid, cost, best, evading)
+                         poses, valid, cost, best, evading, terms)
 
     def _people_gap(self, pose: PoseLike, samples: np.ndarray, people: np.ndarray,
                     horizon: float, dt: float = 0.05) -> np.ndarray:

@@ -18,6 +18,14 @@ the filter as chapter 10's fixes did, after two checks:
 
 A corridor fixes the pose across it and not along it: ICP's covariance is long along
 the corridor, and the filter takes from the fix only what it fixes.
+
+When the estimate is lost (a push, a wheel slipping on a ramp: the scans stop fitting
+where the filter says the chair is), :meth:`MapLocalizer.recover` searches a window of
+poses round the estimate exhaustively with the correlative matcher (Olson 2009,
+:func:`abcwc.mapping.correlative.correlative_match`) instead of ICP's local descent,
+refines the best with ICP, and takes it only if the scan fits there well and the
+search's covariance says the place is unambiguous: amcl's global localisation, over a
+window instead of the whole map.
 """
 
 from __future__ import annotations
@@ -29,6 +37,7 @@ import numpy as np
 from abcwc.estimation.ekf import ChairEkf
 from abcwc.geometry import transform_points, wrap_angle, wrap_tick_delta
 from abcwc.mapping.grid import OCCUPIED, GridGeometry
+from abcwc.mapping.correlative import LikelihoodField, correlative_match
 from abcwc.mapping.icp import IcpTarget, TooFewPairsError, icp, scan_points
 from abcwc.params import ChairParams, default_params
 from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame
@@ -82,6 +91,8 @@ class MapLocalizer:
                  relocalise_after: int = 5, lost_after: int = 30):
         self.params = p = params or default_params()
         self.target = IcpTarget.build(map_points)
+        self._map_points = np.asarray(map_points, dtype=float)
+        self._field: LikelihoodField | None = None  # built on the first recovery
         self.ekf = ekf or ChairEkf(start, p, start_std=(0.05, 0.05, 0.02))
         scanners = [name for name, spec in p.sensors.items() if getattr(spec, "beams", 1) > 1]
         if scan_frame not in scanners:
@@ -185,6 +196,39 @@ class MapLocalizer:
         else:
             self.ekf.update_pose(fix, fix_cov)
         self.accepted += 1
+        self.rejected_in_a_row = self._disagreeing = 0
+        return True
+
+    def recover(self, scan: LaserScan, window_xy: float = 2.0,
+                window_theta: float = math.radians(45.0),
+                max_std: tuple[float, float] = (0.1, 0.05)) -> bool:
+        """Search ``+-window_xy`` m and ``+-window_theta`` rad round the estimate for where
+        ``scan`` fits the map (module notes); True, and the pose reset there, if the scan
+        fits well (ICP fitness >= 0.8, rms <= 0.02 m) and the search's standard
+        deviations are within ``max_std`` (m, rad): one place, not a corridor's many."""
+        points = transform_points(self.mount, scan_points(scan))
+        if len(points) < 10:
+            return False
+        if self._field is None:
+            self._field = LikelihoodField(self._map_points, resolution=0.05, sigma=0.05,
+                                          margin=1.0)
+        estimate = self.pose
+        found = correlative_match(points, self._field, (estimate.x, estimate.y,
+                                                        estimate.theta),
+                                  window_xy=window_xy, window_theta=window_theta,
+                                  angle_step=math.radians(1.0))
+        std = np.sqrt(np.clip(np.diag(found.covariance), 0.0, None))
+        if std[0] > max_std[0] or std[1] > max_std[0] or std[2] > max_std[1]:
+            return False
+        try:
+            result = icp(points, self.target, found.pose,
+                         max_correspondence_distance=self.max_correspondence_distance,
+                         max_iterations=30, tolerance=1e-4)
+        except TooFewPairsError:
+            return False
+        if result.fitness < 0.8 or result.rms > 0.02:
+            return False
+        self._relocalise(Pose2D(*map(float, result.pose)), result.covariance + self.fix_floor)
         self.rejected_in_a_row = self._disagreeing = 0
         return True
 

@@ -137,6 +137,7 @@ class NavigatorSettings:
     footprint_padding: float = 0.05  # m round the footprint in DWA's collision check
     range_mark_wall_distance: float = 0.25  # m: sonar/IR marks this near a map wall are it
     range_mark_decay: float = 1.0  # s: time constant of the sonar/IR marks' fading
+    relocalise_patience: float = 10.0  # s of searching for the chair's place when lost
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.15  # m/s
     max_recoveries: int = 4
@@ -298,9 +299,8 @@ class Navigator(BehaviourBase):
             self.fail(f"out of time: {self._timeout:.0f} s without reaching the goal")
             return Twist(0.0, 0.0)
         if self.localizer.lost:
-            self.fail("lost: the last scans no longer fit the map where the chair thinks "
-                      "it is")
-            return Twist(0.0, 0.0)
+            return self._relocalise(frame)
+        self._lost_since = None
 
         if math.hypot(self.goal.x - pose.x, self.goal.y - pose.y) <= s.xy_goal_tolerance:
             return self._turn_to_goal_heading(pose)
@@ -329,6 +329,27 @@ class Navigator(BehaviourBase):
             return self._slowed_for_the_goal(result.command, pose)
         return self._blocked(frame, pose)
 
+    def _relocalise(self, frame: SensorFrame) -> Twist:
+        """Lost: stand still and search round the estimate for where the scan fits the
+        map (:meth:`MapLocalizer.recover`), once a second; fail after
+        ``relocalise_patience`` s without a place."""
+        self._phase = "relocalising"
+        if self._lost_since is None:
+            self._lost_since, self._next_search = frame.t, frame.t
+        scan = frame.readings.get(self.localizer.scan_frame)
+        if frame.t >= self._next_search and isinstance(scan, LaserScan):
+            self._next_search = frame.t + 1.0
+            if self.localizer.recover(scan):
+                self._lost_since = None
+                self._next_plan = -math.inf  # plan again from where the chair really is
+                self._anchor = (frame.t, self.localizer.pose)
+                return Twist(0.0, 0.0)
+        if frame.t - self._lost_since > self.settings.relocalise_patience:
+            self.fail("lost: the scans no longer fit the map where the chair thinks it is, "
+                      f"and no place within reach fits them either "
+                      f"({self.settings.relocalise_patience:.0f} s of searching)")
+        return Twist(0.0, 0.0)
+
     def _slowed_for_the_goal(self, command: Twist, pose: Pose2D) -> Twist:
         """At most the speed from which braking at half ``acc_lim_x`` stops the chair
         half-way into the goal tolerance: it arrives, rather than passes through."""
@@ -339,6 +360,8 @@ class Navigator(BehaviourBase):
 
     # ------------------------------------------------------------------ the parts
     def _clear_goal_state(self) -> None:
+        self._lost_since: float | None = None
+        self._next_search = -math.inf
         self._decided_at: float | None = None
         self._started: float | None = None
         self._timeout = math.inf

@@ -13,7 +13,7 @@ and for a moving picture, ``HTML(viz.to_html(viz.animate_run(log, chair.world)))
 """
 
 from abcwc.viz.animation import animate_run, frame_rows, save_animation, to_html
-from abcwc.viz.costmap import costmap_colours, plot_costmap, plot_footprint
+from abcwc.viz.costmap import costmap_colours, plot_costmap, plot_dwa, plot_footprint
 from abcwc.viz.scene import (
     ChairArtist,
     chair_outlines,
@@ -46,6 +46,7 @@ __all__ = [
     "mount_pose",
     "plot_chair",
     "plot_costmap",
+    "plot_dwa",
     "plot_footprint",
     "plot_log_scan",
     "plot_people",

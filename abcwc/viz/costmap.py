@@ -1,4 +1,5 @@
-"""Costmaps drawn the way RViz shows them (its "costmap" colour scheme).
+"""Costmaps drawn the way RViz shows them (its "costmap" colour scheme), and DWA's
+trajectories over them.
 
 Free cells are left clear, inflated cells run from blue (cheap) through red (costly),
 ``INSCRIBED`` cells are cyan, ``LETHAL`` cells magenta and unknown cells grey, over the
@@ -7,11 +8,13 @@ map frame in metres.
 
 from __future__ import annotations
 
+import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 
 from abcwc.navigation.costmap import INSCRIBED, LETHAL, NO_INFORMATION, Costmap, Footprint
+from abcwc.navigation.dwa import DwaResult
 from abcwc.viz._common import new_axes
 
 
@@ -59,4 +62,29 @@ def plot_footprint(footprint: Footprint, ax: Axes | None = None) -> Axes:
     ax.set(xlim=(-reach, reach), ylim=(-reach, reach), aspect="equal", xlabel="x (m)",
            ylabel="y (m)")
     ax.legend(loc="lower left", fontsize=8)
+    return ax
+
+
+def plot_dwa(result: DwaResult, ax: Axes | None = None, legend: bool = True) -> Axes:
+    """One DWA decision: every sampled trajectory, the dropped ones grey and dashed, the
+    others coloured by their cost (cheap green to dear red), the chosen one black."""
+    ax = new_axes(ax)
+    valid = np.flatnonzero(result.valid)
+    for k in np.flatnonzero(~result.valid):
+        ax.plot(result.poses[k, :, 0], result.poses[k, :, 1], color="0.6", linewidth=0.6,
+                linestyle="--")
+    if valid.size:
+        costs = result.cost[valid]
+        span = float(np.ptp(costs)) or 1.0
+        colours = plt.get_cmap("RdYlGn_r")((costs - costs.min()) / span)
+        for k, colour in zip(valid, colours):
+            ax.plot(result.poses[k, :, 0], result.poses[k, :, 1], color=colour, linewidth=0.9)
+    if result.best >= 0:
+        ax.plot(result.poses[result.best, :, 0], result.poses[result.best, :, 1], "k-",
+                linewidth=2.2, label=f"chosen (v {result.command.v:.2f} m/s, "
+                                     f"w {result.command.w:.2f} rad/s)")
+    if legend:
+        ax.plot([], [], color="0.6", linestyle="--", label="dropped: would touch")
+        ax.legend(loc="lower left", fontsize=8)
+    ax.set(aspect="equal", xlabel="x (m)", ylabel="y (m)")
     return ax

@@ -36,8 +36,8 @@ import numpy as np
 
 from abcwc.estimation.ekf import ChairEkf
 from abcwc.geometry import transform_points, wrap_angle, wrap_tick_delta
-from abcwc.mapping.grid import OCCUPIED, GridGeometry
 from abcwc.mapping.correlative import LikelihoodField, correlative_match
+from abcwc.mapping.grid import OCCUPIED, GridGeometry
 from abcwc.mapping.icp import IcpTarget, TooFewPairsError, icp, scan_points
 from abcwc.params import ChairParams, default_params
 from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame

@@ -127,3 +127,20 @@ def test_people_are_judged_by_where_the_chair_can_still_stop():
     # a longer braking delay leaves less room: the same sample is judged nearer
     quick = DwaPlanner(FOOTPRINT)._people_gap((0.0, 0.0, 0.0), samples, person, 4.0, 0.001)
     assert quick[2] - gaps[2] == pytest.approx(0.6 * delay, abs=2e-3)
+
+
+def test_the_decision_plot_draws_every_roll_out_and_marks_the_chosen_one():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from abcwc import viz
+
+    costmap = corridor(wall_x=1.2)
+    result = DwaPlanner(FOOTPRINT).plan(costmap, (0.0, 0.0, 0.0), (0.5, 0.0), PATH)
+    ax = viz.plot_dwa(result)
+    lines = [line for line in ax.lines if len(line.get_xdata()) > 1]
+    assert len(lines) == len(result.samples) + 1  # every roll-out, then the chosen again
+    dropped = [line for line in lines if line.get_linestyle() == "--"]
+    assert len(dropped) == int((~result.valid).sum()) > 0
+    chosen = lines[-1]
+    assert np.allclose(chosen.get_xdata(), result.poses[result.best, :, 0])

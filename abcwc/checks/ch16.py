@@ -185,12 +185,13 @@ def prediction_check(predicted: Callable[[], float], measured: float) -> str:
     expect(isinstance(value, (int, float)) and math.isfinite(value) and 0 <= value <= 1,
            f"predicted_fraction() gave {format_value(value)}; write one fraction in 0..1")
     if abs(value - measured) > 0.1:
-        why = ("A* touches more than that: the octile heuristic counts every cell at the "
-               "neutral weight 50, but the cells near walls and doors cost more, so the "
-               "search must look round before it trusts the way through a door"
+        why = ("A* touches more than that: its heuristic counts 50 a cell in a straight "
+               "line, through walls, so every room on the goal's side of the corridor "
+               "looks promising and is searched before the search learns its only door "
+               "leads back"
                if value < measured else
-               "A* touches fewer than that: the heuristic pulls the search along the way "
-               "to the goal, and Dijkstra spreads in every direction until it gets there")
+               "A* touches fewer than that: the heuristic pulls the search towards the "
+               "goal, and Dijkstra spreads in every direction until it gets there")
         raise NotYet(f"you predicted {value:.2f}, A* touched {measured:.2f} of Dijkstra's "
                      f"cells: {why}")
     return f"you predicted {value:.2f}, A* touched {measured:.2f} of Dijkstra's cells"

@@ -115,3 +115,33 @@ def test_a_chair_carried_out_of_the_search_window_stays_lost():
     for _ in range(25):  # a scan taken after the move
         chair.step()
     assert not localizer.recover(chair.read().lidar)
+
+
+def test_a_person_beside_the_chair_hides_the_walls_but_does_not_make_it_lost():
+    """Returns short of the map's walls are explained by things not on it (a person);
+    only beams that reach through a wall say the estimate is wrong."""
+    from abcwc.sim.world import world_from_dict
+
+    floor = SimBase("floor", people=False).world
+    beside = {"name": "beside", "path": [[2.3, 8.36], [2.31, 8.36]], "speed": 0.01,
+              "radius": 0.25}  # standing 0.1 m from the chair's right side
+    world = world_from_dict({
+        "name": "floor+person", "walls": [[list(w[:2]), list(w[2:])] for w in floor.walls],
+        "places": {"start": [2.0, 9.0, 0.0]}, "people": [beside]})
+    chair = SimBase(world, seed=26, lidar=True)
+    # a strict fit (85 % of the points on a wall) that the person's shadow fails
+    localizer = MapLocalizer(wall_points(world.walls), chair.pose, lost_after=5,
+                             min_fitness=0.85)
+    for _ in range(round(10.0 / chair.period)):
+        localizer.observe(chair.step())
+    assert localizer.rejected >= 10 and localizer.accepted == 0  # every scan refused
+    assert not localizer.lost  # but none reached through a wall
+    truth = chair.pose
+    from abcwc.geometry import transform_points
+    from abcwc.mapping.icp import scan_points
+
+    points = transform_points(localizer.mount, scan_points(chair.read().lidar))
+    here = np.array([truth.x, truth.y, truth.theta])
+    assert localizer.see_through_fraction(points, here) < localizer.see_through
+    away = here + (0.0, 1.2, 0.0)  # 1.2 m north: across the corridor's wall
+    assert localizer.see_through_fraction(points, away) > 0.2

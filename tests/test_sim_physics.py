@@ -130,3 +130,30 @@ def test_same_seed_same_run_and_other_seed_differs():
     for name in ("pose", "ticks", "gyro_z", "sonar", "ir"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
     assert not np.array_equal(a.gyro_z, c.gyro_z)
+
+
+def test_a_walker_that_bumps_the_chair_stops_instead_of_shoving_it():
+    """A person walking into a standing chair pauses (people do; a kinematic body of
+    infinite mass would push the chair down the room for as long as it walked)."""
+    from abcwc.sim.people import BUMP_PAUSE
+    from abcwc.sim.world import world_from_dict
+
+    world = world_from_dict({
+        "name": "box+walker", "walls": [[[0, 0], [20, 0], [20, 20], [0, 20], [0, 0]]],
+        "places": {"start": [10, 10, math.pi / 2]},
+        "people": [{"path": [[6, 10], [18, 10]], "speed": 1.0, "radius": 0.25,
+                    "loop": False}],
+    })
+    chair = SimBase(world=world, errors="ideal", params=noise_free())
+    start = chair.pose
+    touched_at = None
+    for _ in range(round(6.0 / chair.period)):
+        frame = chair.step()
+        if touched_at is None and frame.collisions:
+            touched_at = frame.t
+            x_at_touch = chair.walkers[0].circle[0]
+    assert touched_at is not None  # it walked into the chair (it does not avoid it)
+    assert math.hypot(chair.pose.x - start.x, chair.pose.y - start.y) < 0.1
+    # it stood for the pause after each touch, so it got no further than a bump's depth
+    assert chair.walkers[0].circle[0] < x_at_touch + 0.1
+    assert BUMP_PAUSE > 0

@@ -31,8 +31,8 @@ Every control cycle (``controller_frequency``, 5 Hz in the thesis's A.17):
    its ``goal_front`` and ``alignment`` costs). Without the forward point every turn on
    the spot ends where it began and scores as standing still, so a chair facing away
    from its path would never turn to it. ``max_cost`` is the highest costmap value
-   under the footprint. The two
-   distance maps are Euclidean distance transforms of the path and goal cells, where
+   under the footprint. The two distances are straight lines from the point's cell to
+   the nearest path cell and to the goal cell (centre to centre), where
    base_local_planner's ``MapGrid`` runs a wavefront around obstacles: a trajectory
    ending behind a thin wall looks closer here than it is, and the global path, which
    goes round the wall, is what keeps that from mattering.
@@ -195,19 +195,21 @@ class DwaPlanner:
         worst = costmap.cost[rows, cols].reshape(len(samples), -1).max(axis=1)
         valid = on_map & clear.all(axis=1)
 
-        path_distance, goal_distance = self._distance_maps(costmap, path)
+        path_cells, goal_cell = self._path_cells(costmap, path)
         ends = poses[:, -1]
         fronts = ends[:, :2] + lp.heading_lookahead * np.column_stack(
             [np.cos(ends[:, 2]), np.sin(ends[:, 2])])
         terms = {name: np.zeros(len(samples)) for name in ("path", "goal", "occupancy")}
         inside = np.ones(len(samples), dtype=bool)
+        res = costmap.resolution
         for point in (ends[:, :2], fronts):
             p_rows, p_cols = costmap.xy_to_cell(point[:, 0], point[:, 1])
             inside &= costmap.contains(p_rows, p_cols)
             p_rows = np.clip(p_rows, 0, costmap.height - 1)
             p_cols = np.clip(p_cols, 0, costmap.width - 1)
-            terms["path"] += lp.pdist_scale * path_distance[p_rows, p_cols]
-            terms["goal"] += lp.gdist_scale * goal_distance[p_rows, p_cols]
+            cells = np.column_stack([p_rows, p_cols])
+            terms["path"] += lp.pdist_scale * _nearest_distance(cells, path_cells) * res
+            terms["goal"] += lp.gdist_scale * _nearest_distance(cells, goal_cell) * res
         terms["occupancy"] = lp.occdist_scale * worst
         cost = terms["path"] + terms["goal"] + terms["occupancy"]
         valid &= inside
@@ -277,24 +279,25 @@ class DwaPlanner:
         return (distance - people[:, 4] - self._radius).min(axis=(1, 2, 3))
 
     @staticmethod
-    def _distance_maps(costmap: Costmap, path: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Distances (m) from every cell to the path's cells inside the window and to the
-        local goal (the last path point inside it, or the path point nearest the window)."""
+    def _path_cells(costmap: Costmap, path: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(K, 2) rows and columns of the path's cells inside the window, and (1, 2) the
+        local goal's (the last path point inside it, or the path point nearest the
+        window, clipped in)."""
         rows, cols = costmap.world_to_cell(path)
         inside = costmap.contains(rows, cols)
         if inside.any():
-            path_rows, path_cols = rows[inside], cols[inside]
-            goal = (path_rows[-1], path_cols[-1])
-        else:  # the path lies outside the window: aim at its nearest point, clipped in
-            centre = costmap.cell_to_world(costmap.height // 2, costmap.width // 2)
-            nearest = int(np.argmin(np.hypot(*(path - centre).T)))
-            goal = (int(np.clip(rows[nearest], 0, costmap.height - 1)),
-                    int(np.clip(cols[nearest], 0, costmap.width - 1)))
-            path_rows, path_cols = np.array([goal[0]]), np.array([goal[1]])
-        not_path = np.ones(costmap.shape, dtype=bool)
-        not_path[path_rows, path_cols] = False
-        not_goal = np.ones(costmap.shape, dtype=bool)
-        not_goal[goal] = False
-        res = costmap.resolution
-        return (ndimage.distance_transform_edt(not_path) * res,
-                ndimage.distance_transform_edt(not_goal) * res)
+            cells = np.column_stack([rows[inside], cols[inside]])
+            return cells, cells[-1:]
+        centre = costmap.cell_to_world(costmap.height // 2, costmap.width // 2)
+        nearest = int(np.argmin(np.hypot(*(path - centre).T)))
+        goal = np.array([[np.clip(rows[nearest], 0, costmap.height - 1),
+                          np.clip(cols[nearest], 0, costmap.width - 1)]])
+        return goal, goal
+
+
+def _nearest_distance(cells: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """(N,) the distance (cells, centre to centre) from each of ``cells`` (N, 2) to the
+    nearest of ``targets`` (K, 2): what a Euclidean distance transform of the targets
+    holds at those cells, computed for the few cells asked about instead of all."""
+    gaps = cells[:, None, :].astype(float) - targets[None, :, :]
+    return np.sqrt((gaps**2).sum(axis=2).min(axis=1))

@@ -16,6 +16,14 @@ the filter as chapter 10's fixes did, after two checks:
   ``d^2 = e^T (P + R)^-1 e`` below the chi-square 99.9 % point for 3 degrees of
   freedom (16.27), so one bad match cannot drag the estimate away.
 
+A refused scan is not yet evidence that the estimate is wrong: a person standing by
+the chair hides most of the walls, and the few returns left fit badly. What a wrong
+estimate produces, and occlusion cannot, is a beam that reaches *past* a wall of the map
+(the beam model's lesson: short returns are explained by things not on the map, long
+ones are not; Thrun, Burgard and Fox, *Probabilistic Robotics*, 6.3). Only refused
+scans with more than ``see_through`` of their beams passing through the map's walls
+count towards :attr:`MapLocalizer.lost`.
+
 A corridor fixes the pose across it and not along it: ICP's covariance is long along
 the corridor, and the filter takes from the fix only what it fixes.
 
@@ -39,6 +47,7 @@ from abcwc.geometry import transform_points, wrap_angle, wrap_tick_delta
 from abcwc.mapping.correlative import LikelihoodField, correlative_match
 from abcwc.mapping.grid import OCCUPIED, GridGeometry
 from abcwc.mapping.icp import IcpTarget, TooFewPairsError, icp, scan_points
+from abcwc.mapping.raytrace import walk_cells
 from abcwc.params import ChairParams, default_params
 from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame
 
@@ -88,11 +97,20 @@ class MapLocalizer:
                  min_fitness: float = 0.5, max_rms: float = 0.05,
                  max_correspondence_distance: float = 0.3,
                  fix_floor: tuple[float, float, float] = (0.02, 0.02, 0.01),
-                 relocalise_after: int = 5, lost_after: int = 30):
+                 relocalise_after: int = 5, lost_after: int = 30,
+                 see_through: float = 0.1):
         self.params = p = params or default_params()
         self.target = IcpTarget.build(map_points)
         self._map_points = np.asarray(map_points, dtype=float)
         self._field: LikelihoodField | None = None  # built on the first recovery
+        if not 0.0 < see_through < 1.0:
+            raise ValueError(f"see_through must be a fraction in (0, 1), got {see_through!r}")
+        self.see_through = float(see_through)
+        lo, hi = self._map_points.min(axis=0) - 1.0, self._map_points.max(axis=0) + 1.0
+        size = np.ceil((hi - lo) / 0.05).astype(int) + 1
+        self._wall_grid = GridGeometry(0.05, int(size[0]), int(size[1]), (lo[0], lo[1], 0.0))
+        self._walls = np.zeros(self._wall_grid.shape, dtype=bool)
+        self._walls[self._wall_grid.world_to_cell(self._map_points)] = True
         self.ekf = ekf or ChairEkf(start, p, start_std=(0.05, 0.05, 0.02))
         scanners = [name for name, spec in p.sensors.items() if getattr(spec, "beams", 1) > 1]
         if scan_frame not in scanners:
@@ -128,8 +146,9 @@ class MapLocalizer:
 
     @property
     def lost(self) -> bool:
-        """True after ``lost_after`` scan matches in a row were refused: the scans no
-        longer fit the map where the estimate says the chair is."""
+        """True after ``lost_after`` scan matches in a row were refused with beams through
+        the map's walls: the scans no longer fit the map where the estimate says the
+        chair is."""
         return self.rejected_in_a_row >= self.lost_after
 
     @property
@@ -171,7 +190,7 @@ class MapLocalizer:
         """Lay ``scan`` on the map from the current estimate; True if the fix was taken."""
         points = transform_points(self.mount, scan_points(scan))
         if len(points) < 10:
-            return self._refuse()
+            return self._refuse(points, None)
         estimate = self.pose
         guess = np.array([estimate.x, estimate.y, estimate.theta])
         try:
@@ -179,9 +198,9 @@ class MapLocalizer:
                          max_correspondence_distance=self.max_correspondence_distance,
                          max_iterations=20, tolerance=1e-4)
         except TooFewPairsError:
-            return self._refuse()
+            return self._refuse(points, guess)
         if result.fitness < self.min_fitness or result.rms > self.max_rms:
-            return self._refuse()
+            return self._refuse(points, guess)
         fix_cov = result.covariance + self.fix_floor
         error = result.pose - guess
         error[2] = wrap_angle(float(error[2]))
@@ -191,7 +210,7 @@ class MapLocalizer:
             fits_well = result.fitness >= 0.8 and result.rms <= 0.02
             self._disagreeing = self._disagreeing + 1 if fits_well else 0
             if self._disagreeing < self.relocalise_after:
-                return self._refuse()
+                return self._refuse(points, guess)
             self._relocalise(fix, fix_cov)
         else:
             self.ekf.update_pose(fix, fix_cov)
@@ -242,7 +261,31 @@ class MapLocalizer:
         cov[:3, :3] = fix_cov
         self.relocalisations += 1
 
-    def _refuse(self) -> bool:
+    def see_through_fraction(self, points: np.ndarray, pose: np.ndarray) -> float:
+        """The fraction of a scan's beams (``points``, base_link, m) that, from ``pose``,
+        pass through a wall of the map on their way to their return (the last 0.15 m
+        before it left out: the wall the beam hit)."""
+        if not len(points):
+            return 0.0
+        origin = transform_points(pose, np.asarray(self.mount[:2], dtype=float))
+        ends = transform_points(pose, points)
+        length = np.hypot(*(ends - origin).T)
+        short = origin + (ends - origin) * (np.maximum(length - 0.15, 0.0) / np.maximum(
+            length, 1e-9))[:, None]
+        grid = self._wall_grid
+        walk = walk_cells(np.broadcast_to(grid.to_cell_units(origin), short.shape),
+                          grid.to_cell_units(short))
+        inside = grid.contains(walk.row, walk.col)
+        hit = np.zeros(len(walk.row), dtype=bool)
+        hit[inside] = self._walls[walk.row[inside], walk.col[inside]]
+        through = np.zeros(len(points), dtype=bool)
+        through[walk.segment[hit]] = True
+        return float(through.mean())
+
+    def _refuse(self, points: np.ndarray, guess: np.ndarray | None) -> bool:
+        """A refused scan; it counts towards :attr:`lost` only if its beams go through the
+        map's walls from the estimate (module notes)."""
         self.rejected += 1
-        self.rejected_in_a_row += 1
+        if guess is None or self.see_through_fraction(points, guess) > self.see_through:
+            self.rejected_in_a_row += 1
         return False

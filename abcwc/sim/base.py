@@ -138,6 +138,7 @@ class SimBase(BodyMixin):
         space.on_collision(CHAIR_COLLISION_TYPE, PERSON_COLLISION_TYPE,
                            begin=self._on_contact, post_solve=self._on_impulse)
         self.space, self.chair, self._control = space, chair, control
+        self._chair_shape = shape
 
     def _on_contact(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         self.collisions += 1
@@ -224,7 +225,8 @@ class SimBase(BodyMixin):
         self._control.angular_velocity = motion.w
         sub = dt / PHYSICS_SUBSTEPS
         for walker in self.walkers:
-            walker.steer(dt)
+            gap = self._chair_shape.point_query(walker.body.position).distance - walker.spec.radius
+            walker.steer(dt, touching=gap <= 0.005)
         for _ in range(PHYSICS_SUBSTEPS):
             self.space.step(sub)
         self.steps += 1

@@ -2,7 +2,10 @@
 
 A walker heads for its next waypoint at constant speed and, at the end of its path,
 loops back to the start or turns round. It does not avoid the chair: that is the
-chair's job.
+chair's job. But a person who bumps into something stops: a walker touching the chair
+stands still for ``BUMP_PAUSE`` s before walking on. (A kinematic body has infinite
+mass; without the pause a walker would shove a chair and its passenger down a corridor
+for as long as it walked.)
 """
 
 from __future__ import annotations
@@ -15,6 +18,8 @@ import pymunk
 from abcwc.sim.world import PersonSpec
 
 PERSON_COLLISION_TYPE = 3
+BUMP_PAUSE = 1.0
+"""s a walker stands still after touching the chair."""
 
 
 class Walker:
@@ -31,9 +36,17 @@ class Walker:
         self._waypoints = [tuple(map(float, p)) for p in spec.path]
         self._target = 1
         self._direction = 1
+        self._paused = 0.0  # s of standing still left after a bump
 
-    def steer(self, dt: float) -> None:
-        """Set the velocity for the next ``dt`` seconds towards the current waypoint."""
+    def steer(self, dt: float, touching: bool = False) -> None:
+        """Set the velocity for the next ``dt`` seconds towards the current waypoint, or
+        zero while pausing after touching the chair (``touching``: in contact now)."""
+        if touching:
+            self._paused = BUMP_PAUSE
+        if self._paused > 0.0:
+            self._paused -= dt
+            self.body.velocity = (0.0, 0.0)
+            return
         x, y = self.body.position
         tx, ty = self._waypoints[self._target]
         distance = math.hypot(tx - x, ty - y)

@@ -216,3 +216,26 @@ def test_a_chair_moved_by_hand_finds_its_place_and_carries_on():
     assert frame.collisions == 0
     truth, estimate = chair.pose, navigator.localizer.pose
     assert math.hypot(truth.x - estimate.x, truth.y - estimate.y) < 0.1
+
+
+def test_drives_by_a_map_file_the_mapping_made(tmp_path):
+    """Map the lab from one spot (a turn on the spot, the lidar's scans laid at the true
+    poses), save it as map_server files, load them, and drive by them: the static layer
+    and the localiser both come from the file."""
+    from abcwc.mapping.grid import OccupancyGrid, integrate_log
+    from abcwc.mapping.map_io import load_map, save_map
+
+    surveyor = SimBase("lab", seed=8, lidar=True, start="centre", people=False)
+    log = surveyor.run(lambda frame: Twist(0.0, 0.6), 12.0)
+    grid = OccupancyGrid.covering(*surveyor.world.bounds, 0.05, margin=1.0)
+    assert integrate_log(grid, log) >= 100
+    save_map(grid, tmp_path / "lab.yaml")
+    loaded = load_map(tmp_path / "lab.yaml")
+
+    chair = SimBase("lab", seed=9, lidar=True, start="centre", people=False)
+    navigator = Navigator.for_map(loaded.trinary(), loaded, chair.pose)
+    navigator.go_to((8.0, 6.5, 0.0))
+    _, frame = _drive(chair, navigator, 60)
+    assert navigator.status is Status.SUCCEEDED, navigator.failure
+    assert frame.collisions == 0
+    assert math.hypot(chair.pose.x - 8.0, chair.pose.y - 6.5) <= 0.3

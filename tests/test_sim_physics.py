@@ -133,8 +133,9 @@ def test_same_seed_same_run_and_other_seed_differs():
 
 
 def test_a_walker_that_bumps_the_chair_stops_instead_of_shoving_it():
-    """A person walking into a standing chair pauses (people do; a kinematic body of
-    infinite mass would push the chair down the room for as long as it walked)."""
+    """A person walking into a standing chair pauses and turns back (people do; a
+    kinematic body of infinite mass would push the chair down the room for as long as it
+    walked)."""
     from abcwc.sim.people import BUMP_PAUSE
     from abcwc.sim.world import world_from_dict
 
@@ -154,6 +155,7 @@ def test_a_walker_that_bumps_the_chair_stops_instead_of_shoving_it():
             x_at_touch = chair.walkers[0].circle[0]
     assert touched_at is not None  # it walked into the chair (it does not avoid it)
     assert math.hypot(chair.pose.x - start.x, chair.pose.y - start.y) < 0.1
-    # it stood for the pause after each touch, so it got no further than a bump's depth
-    assert chair.walkers[0].circle[0] < x_at_touch + 0.1
-    assert BUMP_PAUSE > 0
+    # it stood for the pause, then turned back: it ends well short of where it touched
+    walked_back = chair.walkers[0].circle[0]
+    assert x_at_touch - walked_back == pytest.approx(6.0 - touched_at - BUMP_PAUSE, abs=0.1)
+    assert frame.collisions == 1

@@ -222,9 +222,10 @@ class MapLocalizer:
                 window_theta: float = math.radians(45.0),
                 max_std: tuple[float, float] = (0.1, 0.05)) -> bool:
         """Search ``+-window_xy`` m and ``+-window_theta`` rad round the estimate for where
-        ``scan`` fits the map (module notes); True, and the pose reset there, if the scan
-        fits well (ICP fitness >= 0.8, rms <= 0.02 m) and the search's standard
-        deviations are within ``max_std`` (m, rad): one place, not a corridor's many."""
+        ``scan`` fits the map (module notes); True, and the pose reset there, if the
+        search's standard deviations are within ``max_std`` (m, rad: one place, not a
+        corridor's many), the scan fits there as a fix must (``min_fitness``,
+        ``max_rms``) and no more than ``see_through`` of its beams pass through a wall."""
         points = transform_points(self.mount, scan_points(scan))
         if len(points) < 10:
             return False
@@ -245,7 +246,8 @@ class MapLocalizer:
                          max_iterations=30, tolerance=1e-4)
         except TooFewPairsError:
             return False
-        if result.fitness < 0.8 or result.rms > 0.02:
+        if (result.fitness < self.min_fitness or result.rms > self.max_rms
+                or self.see_through_fraction(points, result.pose) > self.see_through):
             return False
         self._relocalise(Pose2D(*map(float, result.pose)), result.covariance + self.fix_floor)
         self.rejected_in_a_row = self._disagreeing = 0

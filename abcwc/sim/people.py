@@ -3,9 +3,9 @@
 A walker heads for its next waypoint at constant speed and, at the end of its path,
 loops back to the start or turns round. It does not avoid the chair: that is the
 chair's job. But a person who bumps into something stops: a walker touching the chair
-stands still for ``BUMP_PAUSE`` s before walking on. (A kinematic body has infinite
-mass; without the pause a walker would shove a chair and its passenger down a corridor
-for as long as it walked.)
+stands still for ``BUMP_PAUSE`` s, then turns back the way it came. (A kinematic body
+has infinite mass; without this a walker would shove a chair and its passenger down a
+corridor for as long as it walked, or lean on a standing chair for ever.)
 """
 
 from __future__ import annotations
@@ -41,8 +41,9 @@ class Walker:
     def steer(self, dt: float, touching: bool = False) -> None:
         """Set the velocity for the next ``dt`` seconds towards the current waypoint, or
         zero while pausing after touching the chair (``touching``: in contact now)."""
-        if touching:
+        if touching and self._paused <= 0.0:
             self._paused = BUMP_PAUSE
+            self._turn_back()
         if self._paused > 0.0:
             self._paused -= dt
             self.body.velocity = (0.0, 0.0)
@@ -60,10 +61,15 @@ class Walker:
         scale = self.spec.speed / distance
         self.body.velocity = ((tx - x) * scale, (ty - y) * scale)
 
+    def _turn_back(self) -> None:
+        """Head for the waypoint behind instead of the one ahead."""
+        self._direction = -self._direction
+        self._target = (self._target + self._direction) % len(self._waypoints)
+
     def _advance_target(self) -> None:
         last = len(self._waypoints) - 1
         if self.spec.loop:
-            self._target = (self._target + 1) % (last + 1)
+            self._target = (self._target + self._direction) % (last + 1)
         else:
             if not 0 <= self._target + self._direction <= last:
                 self._direction = -self._direction

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from abcwc.description import DescriptionError, RobotDescription, load_urdf
 from abcwc.paths import data_dir
 
 if sys.version_info >= (3, 11):
@@ -39,10 +40,24 @@ class RangeSensorParams:
     noise_std: float
     frame_id: str  # ROS frame id of its readings, e.g. "sonar_link"
     mount: tuple[float, float, float] = (0.0, 0.0, 0.0)  # x, y (m), yaw (rad) in base_link
+    height: float = 0.0  # m above the floor (from the URDF)
     beams: int = 1
     fov_deg: float = 0.0
     half_angle_deg: float = 0.0
     resolution: float = 0.0
+    vertical_fov_deg: float = 0.0  # a camera's vertical field of view
+    scan_height_px: int = 0  # rows of the depth image a fake laser scan takes
+    image_height_px: int = 0
+
+    @property
+    def vertical_half_angle(self) -> float:
+        """Half the vertical spread (rad) the sensor sees: a depth scan's band of
+        ``scan_height_px`` of ``image_height_px`` rows (depthimage_to_laserscan), a
+        sonar's cone (``half_angle_deg``), or 0 for a planar lidar or a thin IR beam."""
+        if self.scan_height_px:
+            return math.radians(self.vertical_fov_deg) * self.scan_height_px \
+                / self.image_height_px / 2
+        return math.radians(self.half_angle_deg)
 
 
 @dataclass(frozen=True)
@@ -53,26 +68,24 @@ class IrRingParams:
     min_range: float
     max_range: float
     noise_std: float
-    ring_radius: float
-    ring_centre: tuple[float, float]
-    first_angle_deg: float
-    frame_ids: tuple[str, ...]  # ROS frame id of ranger k, facing first_angle + 60 k deg
+    frame_ids: tuple[str, ...]  # ROS frame id of each ranger
+    mount_poses: tuple[tuple[float, float, float], ...] = ()  # from the URDF
+    height: float = 0.0  # m above the floor (from the URDF)
     count: int = 6
 
     def __post_init__(self) -> None:
         if len(self.frame_ids) != self.count:
             raise ValueError(f"the IR ring has {self.count} rangers but "
                              f"{len(self.frame_ids)} frame ids: {self.frame_ids!r}")
+        if len(self.mount_poses) != self.count:
+            raise ValueError(f"the IR ring has {self.count} rangers but "
+                             f"{len(self.mount_poses)} mounts")
 
     @property
     def mounts(self) -> np.ndarray:
         """(count, 3): each ranger's ``x, y`` (m) and facing ``yaw`` (rad) in base_link,
-        on the ring of ``ring_radius`` about ``ring_centre``, ranger k facing
-        ``first_angle + 60 k`` degrees."""
-        angles = np.radians(self.first_angle_deg + 60.0 * np.arange(self.count))
-        cx, cy = self.ring_centre
-        return np.column_stack([cx + self.ring_radius * np.cos(angles),
-                                cy + self.ring_radius * np.sin(angles), angles])
+        as the URDF places them (a ring on the base rod, 60 degrees apart)."""
+        return np.array(self.mount_poses, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -219,17 +232,57 @@ def _pick(cls: type, table: dict[str, Any], **renames: str) -> Any:
     return cls(**kwargs)
 
 
+def _geometry(description: RobotDescription, sensors: dict[str, Any]) -> dict[str, Any]:
+    """The footprint, the drive wheels and every sensor's mount, from the URDF.
+
+    The footprint is the ``chassis`` link's collision box; the wheel diameter and base
+    are the ``left_wheel``/``right_wheel`` collision cylinders and joints; each sensor
+    sits at the link named by its frame id.
+    """
+    chassis = description.links["chassis"].collision
+    wheel = description.links["left_wheel"].collision
+    if chassis is None or chassis.kind != "box" or wheel is None or wheel.kind != "cylinder":
+        raise DescriptionError(f"{description.source}: the chair needs a chassis collision "
+                               "box and left_wheel/right_wheel collision cylinders")
+    centre_x = (description.transform("chassis") @ chassis.origin)[0, 3]
+    left = description.mount("left_wheel")
+    right = description.mount("right_wheel")
+    geometry: dict[str, Any] = {
+        "length": chassis.dimensions[0],
+        "width": chassis.dimensions[1],
+        "axle_to_rear": chassis.dimensions[0] / 2 - centre_x,
+        "drive_wheel_diameter": 2 * wheel.dimensions[0],
+        "wheel_base": left[1] - right[1],
+    }
+    for name in ("sonar", "depth_scan", "lidar"):
+        frame = sensors[name]["frame_id"]
+        sensors[name] = {**sensors[name], "mount": description.mount(frame),
+                         "height": description.height(frame)}
+    frames = sensors["ir"]["frame_ids"]
+    heights = {round(description.height(f), 6) for f in frames}
+    if len(heights) != 1:
+        raise DescriptionError(f"{description.source}: the IR rangers sit at different "
+                               f"heights {sorted(heights)}; the ring model needs one")
+    sensors["ir"] = {**sensors["ir"], "height": heights.pop(),
+                     "mount_poses": tuple(description.mount(f) for f in frames)}
+    return geometry
+
+
 def load_params(path: str | Path | None = None, gyro: str = "datasheet") -> ChairParams:
-    """Read chair parameters from a TOML file (default ``data/chair.toml``).
+    """Read chair parameters from a TOML file (default ``data/chair.toml``) and the
+    URDF it names (``[description] urdf``, beside it): the URDF gives the footprint,
+    the drive wheels and every sensor's mount; the TOML file the rest.
 
     ``gyro`` picks the gyro model: ``"datasheet"`` (default) or ``"pessimistic"``.
     """
     path = Path(path) if path is not None else data_dir() / "chair.toml"
     with open(path, "rb") as handle:
         raw = tomllib.load(handle)
-    sensors = raw["sensors"]
+    sensors = dict(raw["sensors"])
+    description = load_urdf(path.parent / raw["description"]["urdf"])
     flat: dict[str, Any] = {}
     flat.update(raw["body"])
+    flat.update(_geometry(description, sensors))
     flat.update(raw["drive"])
     flat.update(raw["encoders"])
     flat.update({f"pot_{k}": v for k, v in raw["pots"].items()})

@@ -158,6 +158,28 @@ def test_a_person_walking_head_on_down_a_corridor_is_never_touched():
     assert navigator.status is Status.SUCCEEDED, navigator.failure
 
 
+def test_a_walker_turning_back_towards_a_following_chair_is_never_touched():
+    """The chair follows a walker down the corridor; the walker turns round where its
+    path ends (taking the time a person takes to turn) and walks back towards the
+    chair, which keeps clear of them."""
+    ahead = {"name": "walker", "path": [[2.2, 1.5], [12.0, 1.5]], "speed": 0.9,
+             "radius": 0.25, "loop": False}
+    chair = SimBase(_corridor([ahead]), seed=2, lidar=True)
+    navigator = Navigator.for_world(chair.world)
+    navigator.go_to("end")
+    frame, closest = chair.read(), math.inf
+    for _ in range(round(60 / chair.period)):
+        chair.send(navigator(frame))
+        frame = chair.step()
+        x, y, r = chair.walkers[0].circle
+        closest = min(closest, chair._chair_shape.point_query((x, y)).distance - r)
+        if not navigator.running:
+            break
+    assert frame.collisions == 0
+    assert closest > 0.15
+    assert navigator.status is Status.SUCCEEDED, navigator.failure
+
+
 def test_people_tracker_finds_a_walker_and_its_velocity():
     walker = {"name": "w", "path": [[3.0, 1.0], [3.0, 9.0]], "speed": 0.8, "radius": 0.25,
               "loop": False}

@@ -5,8 +5,10 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 
+from abcwc.description import DescriptionError
 from abcwc.params import (
     ChairParams,
     IrRingParams,
@@ -44,17 +46,54 @@ def test_replacing_a_sensor_changes_the_mapping_too():
     assert quiet.sensors["lidar_link"].noise_std == 0.0 and p.sensors["lidar_link"].noise_std > 0
 
 
-def test_an_ir_ring_needs_one_frame_id_per_ranger():
+def test_an_ir_ring_needs_one_frame_id_and_one_mount_per_ranger():
     with pytest.raises(ValueError, match="6 rangers but 2 frame ids"):
-        IrRingParams(10, 0.2, 1.5, 0.01, 0.2, (0.0, 0.0), 0.0, ("a", "b"))
+        IrRingParams(10, 0.2, 1.5, 0.01, ("a", "b"))
+    with pytest.raises(ValueError, match="6 rangers but 1 mounts"):
+        IrRingParams(10, 0.2, 1.5, 0.01, tuple("abcdef"), ((0.0, 0.0, 0.0),))
 
 
-def test_a_chair_file_names_its_frames(tmp_path):
-    text = (data_dir() / "chair.toml").read_text().replace('"lidar_link"', '"laser"')
-    path = tmp_path / "chair.toml"
-    path.write_text(text)
-    p = load_params(path)
+def _chair_files(tmp_path, toml=lambda s: s, urdf=lambda s: s):
+    (tmp_path / "chair.toml").write_text(toml((data_dir() / "chair.toml").read_text()))
+    (tmp_path / "chair.urdf").write_text(urdf((data_dir() / "chair.urdf").read_text()))
+    return tmp_path / "chair.toml"
+
+
+def test_a_chair_file_names_its_frames_and_the_urdf_places_them(tmp_path):
+    rename = lambda s: s.replace('"lidar_link"', '"laser"')  # noqa: E731
+    p = load_params(_chair_files(tmp_path, rename, rename))
     assert isinstance(p, ChairParams) and "laser" in p.sensors and "lidar_link" not in p.sensors
+    assert p.lidar.mount == pytest.approx((0.10, 0.0, 0.0)) and p.lidar.height == 0.35
+    # a frame the TOML names that the URDF lacks is an error naming the frame
+    with pytest.raises(DescriptionError, match="no link 'laser'"):
+        (tmp_path / "toml_only").mkdir()
+        load_params(_chair_files(tmp_path / "toml_only", rename))
+
+
+def test_the_urdf_gives_the_footprint_wheels_and_mounts():
+    """The numbers the library used to keep in chair.toml, now read from the URDF:
+    thesis table 2 (610 x 482 mm, axle 0.16 m from the back), 4.2.1 (195 mm wheels),
+    A.18 (440 mm wheel base), the six IR rangers 60 degrees apart on a 0.20 m ring."""
+    p = load_params()
+    assert (p.length, p.width) == (0.610, 0.482)
+    assert p.axle_to_rear == pytest.approx(0.16, abs=1e-12)
+    assert p.drive_wheel_diameter == pytest.approx(0.195) and p.wheel_base == pytest.approx(0.44)
+    assert p.sonar.mount == pytest.approx((0.40, 0.0, 0.0))
+    assert p.depth_scan.mount == pytest.approx((0.30, 0.0, 0.0))
+    ring = p.ir.mounts
+    centre = np.array([0.14, 0.0])
+    np.testing.assert_allclose(np.hypot(*(ring[:, :2] - centre).T), 0.20)
+    np.testing.assert_allclose(np.degrees(ring[:, 2]) % 360, 60.0 * np.arange(6), atol=1e-9)
+    # each ranger faces straight out from the ring's centre
+    outward = np.arctan2(ring[:, 1] - centre[1], ring[:, 0] - centre[0])
+    np.testing.assert_allclose(np.cos(outward - ring[:, 2]), 1.0)
+
+
+def test_a_chair_urdf_without_a_chassis_box_is_refused(tmp_path):
+    no_box = lambda s: s.replace('<box size="0.610 0.482 0.30"/>',  # noqa: E731
+                                 '<sphere radius="0.3"/>')
+    with pytest.raises(DescriptionError, match="chassis collision box"):
+        load_params(_chair_files(tmp_path, urdf=no_box))
 
 
 def test_navigation_numbers_match_the_thesis():

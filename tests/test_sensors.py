@@ -73,7 +73,7 @@ def test_ir_sees_a_near_wall_in_range():
     chair = SimBase(world=box_world(W, H), errors="ideal", params=noise_free(),
                     start=Pose2D(7.0, 3.0, 0.0))
     p = chair.params.ir
-    x_sensor = 7.0 + p.ring_centre[0] + p.ring_radius
+    x_sensor = 7.0 + p.mounts[0, 0]
     assert chair.frame.ir[0] == pytest.approx(W - x_sensor, abs=1e-9)
 
 
@@ -126,3 +126,75 @@ def test_gyro_reads_true_rate_plus_bias_and_noise():
     tolerance = 4 * p.noise_std / math.sqrt(len(residual)) + 0.001
     assert abs(residual.mean() - chair.gyro.bias) < tolerance
     assert residual.std() == pytest.approx(p.noise_std, rel=0.15)
+
+
+# ------------------------------------------------------------------ heights
+def _room_with_table(start: Pose2D) -> SimBase:
+    """A 10 x 10 m room with a 1.2 x 0.8 m table (top 0.70-0.75 m) centred at (5, 5)."""
+    from abcwc.sim.world import table, world_from_dict
+
+    world = world_from_dict({
+        "name": "room+table", "walls": [[[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]]],
+        "places": {"start": [start.x, start.y, start.theta]}, "objects": table((5.0, 5.0)),
+    })
+    return SimBase(world=world, errors="ideal", params=noise_free(), lidar=True,
+                   depth_scan=True, people=False)
+
+
+def test_the_lidar_sees_a_tables_legs_and_the_depth_scan_its_top():
+    """The lidar's plane (0.35 m) passes under the top (0.70-0.75 m): its middle beam
+    runs between the legs to the far wall; the depth scan's band of rows (8.5 degrees
+    each side of 0.76 m) reaches the top's edge at x = 4.4 m."""
+    chair = _room_with_table(Pose2D(3.0, 5.0, 0.0))
+    frame = chair.read()
+    p = chair.params
+    lidar = frame.lidar
+    middle = int(round(-lidar.angle_min / lidar.angle_increment))
+    assert lidar.angle_min + middle * lidar.angle_increment == pytest.approx(0.0)
+    assert lidar.ranges[middle] == pytest.approx(10.0 - 3.0 - p.lidar.mount[0])
+    # the lidar does see a leg: the beam towards the near left leg's centre
+    leg = np.array([4.425, 5.375]) - (3.0 + p.lidar.mount[0], 5.0)
+    beam = int(round((math.atan2(leg[1], leg[0]) - lidar.angle_min) / lidar.angle_increment))
+    assert lidar.ranges[beam] < np.hypot(*leg)
+    depth = frame.depth_scan
+    angles = depth.angle_min + depth.angle_increment * np.arange(len(depth.ranges))
+    ahead = np.abs(angles) < 0.15  # beams that meet the top's near edge, x = 4.4
+    expected = (4.4 - 3.0 - p.depth_scan.mount[0]) / np.cos(angles[ahead])
+    np.testing.assert_allclose(depth.ranges[ahead], expected, atol=1e-9)
+
+
+def test_a_depth_scan_sees_a_top_only_from_where_its_rows_reach_it():
+    """A top from 1.00 to 1.05 m, above the camera (0.76 m): the band's upper edge rises
+    tan(8.5 deg) per metre, so it reaches 1.00 m at (1.00 - 0.76) / tan(8.5 deg) = 1.60 m
+    (and the sonar's 17-degree cone at (1.00 - 0.69) / tan(17 deg) = 1.01 m)."""
+    from abcwc.sim.raycast import visible_segments
+
+    p = noise_free()
+    segments = np.array([[2.0, -1.0, 2.0, 1.0], [1.0, -1.0, 1.0, 1.0]])
+    bands = np.array([[1.00, 1.05], [1.00, 1.05]])
+    seen = visible_segments(segments, bands, p.depth_scan.height,
+                            p.depth_scan.vertical_half_angle)
+    reach = (1.00 - p.depth_scan.height) / math.tan(p.depth_scan.vertical_half_angle)
+    assert reach == pytest.approx((1.00 - 0.76) / math.tan(math.radians(43 * 190 / 480 / 2)))
+    np.testing.assert_allclose(seen[:, 4], reach)
+    # the near top (1 m) is closer than the reach and is not seen; the far one (2 m) is
+    assert ray_segment_distances(np.zeros(2), np.array([0.0]), seen)[0] == pytest.approx(2.0)
+    # the sonar's cone: the near top's in-cone part runs out to 1 / cos(17 deg) = 1.046
+    # m, past the cone's reach of 1.01 m, so the sonar reads the reach
+    sonar = visible_segments(segments, bands, p.sonar.height, p.sonar.vertical_half_angle)
+    cone_reach = (1.00 - p.sonar.height) / math.tan(math.radians(p.sonar.half_angle_deg))
+    got = cone_nearest_distance(np.zeros(2), 0.0, math.radians(p.sonar.half_angle_deg),
+                                sonar, np.zeros((0, 3)))
+    assert got == pytest.approx(cone_reach)
+
+
+def test_the_chair_runs_into_a_table_top_it_cannot_pass_under():
+    """Every object stops the chair, whatever its height: driving at the table, the
+    chair's front (0.45 m ahead of the axle) stops at the top's edge."""
+    from abcwc.types import Twist
+
+    chair = _room_with_table(Pose2D(3.0, 5.0, 0.0))
+    log = chair.run(lambda f: Twist(0.4, 0.0), 5.0)
+    assert log.collisions[-1] >= 1
+    front = chair.params.length - chair.params.axle_to_rear
+    assert chair.pose.x + front == pytest.approx(4.4, abs=0.02)

@@ -132,30 +132,77 @@ def test_same_seed_same_run_and_other_seed_differs():
     assert not np.array_equal(a.gyro_z, c.gyro_z)
 
 
-def test_a_walker_that_bumps_the_chair_stops_instead_of_shoving_it():
-    """A person walking into a standing chair pauses and turns back (people do; a
-    kinematic body of infinite mass would push the chair down the room for as long as it
-    walked)."""
-    from abcwc.sim.people import BUMP_PAUSE
+def _box_with_walker(start: list, path: list, speed: float):
     from abcwc.sim.world import world_from_dict
 
-    world = world_from_dict({
+    return world_from_dict({
         "name": "box+walker", "walls": [[[0, 0], [20, 0], [20, 20], [0, 20], [0, 0]]],
-        "places": {"start": [10, 10, math.pi / 2]},
-        "people": [{"path": [[6, 10], [18, 10]], "speed": 1.0, "radius": 0.25,
-                    "loop": False}],
+        "places": {"start": start},
+        "people": [{"path": path, "speed": speed, "radius": 0.25, "loop": False}],
     })
+
+
+def test_a_walker_stops_for_a_chair_in_its_way_and_then_turns_back():
+    """A person walking towards a standing chair stops a step short of it, waits, turns
+    round and goes back the way they came; they never touch it."""
+    from abcwc.sim.people import LOOK_AHEAD, TURN_TIME, WAIT_PATIENCE
+
+    world = _box_with_walker([10, 10, math.pi / 2], [[6, 10], [18, 10]], 1.0)
     chair = SimBase(world=world, errors="ideal", params=noise_free())
-    start = chair.pose
-    touched_at = None
-    for _ in range(round(6.0 / chair.period)):
+    walker = chair.walkers[0]
+    gaps, xs = [], []
+    for _ in range(round(8.0 / chair.period)):
         frame = chair.step()
-        if touched_at is None and frame.collisions:
-            touched_at = frame.t
-            x_at_touch = chair.walkers[0].circle[0]
-    assert touched_at is not None  # it walked into the chair (it does not avoid it)
-    assert math.hypot(chair.pose.x - start.x, chair.pose.y - start.y) < 0.1
-    # it stood for the pause, then turned back: it ends well short of where it touched
-    walked_back = chair.walkers[0].circle[0]
-    assert x_at_touch - walked_back == pytest.approx(6.0 - touched_at - BUMP_PAUSE, abs=0.1)
-    assert frame.collisions == 1
+        gaps.append(chair._chair_shape.point_query(walker.body.position).distance - 0.25)
+        xs.append(walker.circle[0])
+    assert frame.collisions == 0
+    assert LOOK_AHEAD - 0.05 < min(gaps) <= LOOK_AHEAD  # within a step of the look-ahead
+    stood = np.sum(np.diff(xs) == 0.0) * chair.period
+    assert stood == pytest.approx(WAIT_PATIENCE + TURN_TIME, abs=2 * chair.period)
+    assert xs[-1] < max(xs) - 2.0  # walking back
+
+
+def test_a_walker_bumped_from_the_side_stops_instead_of_shoving_the_chair():
+    """A chair that drives into a person's side stops on the contact; the person stands
+    for the bump pause and walks back the way they came, and the chair is not shoved (a
+    kinematic body has infinite mass)."""
+    from abcwc.sim.people import BUMP_PAUSE
+
+    world = _box_with_walker([10, 8.0, math.pi / 2], [[6, 10], [18, 10]], 0.5)
+    chair = SimBase(world=world, errors="ideal", params=noise_free())
+    walker = chair.walkers[0]
+    poses, walker_x, collisions = [], [], []
+    for _ in range(round(12.0 / chair.period)):
+        frame = chair.frame
+        chair.send(Twist(0.0 if frame.collisions or frame.t < 5.0 else 0.6, 0.0))
+        frame = chair.step()
+        poses.append(chair.pose)
+        walker_x.append(walker.circle[0])
+        collisions.append(frame.collisions)
+    touched = int(np.argmax(np.array(collisions) > 0))
+    assert touched > 0 and collisions[-1] == 1
+    assert math.hypot(poses[-1].x - poses[touched].x, poses[-1].y - poses[touched].y) < 0.05
+    # it stood for the pause, then walked back at its speed
+    walked_back = walker_x[touched] - walker_x[-1]
+    seconds_left = (len(poses) - 1 - touched) * chair.period
+    assert walked_back == pytest.approx(0.5 * (seconds_left - BUMP_PAUSE), abs=0.1)
+
+
+@pytest.mark.parametrize(("offset", "passes"), [(0.05, False), (0.2, True)])
+def test_a_walker_keeps_a_passing_clearance_from_the_chair(offset, passes):
+    """A person whose way would brush the chair's side (5 cm) stops before it; one whose
+    way keeps 20 cm off walks by. The chair stands at (10, 10) facing +y, its left side
+    at x = 10 - 0.241."""
+    from abcwc.sim.people import PASSING_CLEARANCE
+
+    assert 0.05 < PASSING_CLEARANCE < 0.2
+    side = 10.0 - 0.241 - 0.25 - offset  # the walker's centre line
+    world = _box_with_walker([10, 10, math.pi / 2], [[side, 6], [side, 18]], 1.0)
+    chair = SimBase(world=world, errors="ideal", params=noise_free())
+    walker = chair.walkers[0]
+    for _ in range(round(8.0 / chair.period)):
+        frame = chair.step()
+        assert frame.collisions == 0
+        if walker.circle[1] > 11.0:
+            break
+    assert (walker.circle[1] > 11.0) == passes

@@ -227,10 +227,10 @@ class DwaPlanner:
                 # rather than driving on when driving on gains nothing
                 near_best = score >= score.max() - costmap.resolution
                 best = int(np.argmin(np.where(near_best, samples[:, 0], np.inf)))
-                # the slowest of the window is only as slow as one cycle's braking: ask
-                # for a stop on that arc and let the safety filter brake at its limit
-                v = 0.0 if samples[best, 0] <= samples[:, 0].min() else samples[best, 0]
-                return DwaResult(Twist(float(v), float(samples[best, 1])),
+                # the arc as checked: asking for a stop on it instead (v 0, the same
+                # turn rate) would tighten the turn as the wheels slow and swing a corner
+                # of the chair off the checked arc, into a wall beside it
+                return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])),
                                  samples, poses, valid, np.where(valid, cost, np.inf), best,
                                  evading, terms)
             valid &= clear_of_people

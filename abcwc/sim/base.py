@@ -24,7 +24,8 @@ from abcwc.control.interface_board import InterfaceBoard
 from abcwc.geometry import wrap_angle
 from abcwc.params import ChairParams, default_params
 from abcwc.sim.motor import ChairErrors, MotorController, resolve_errors
-from abcwc.sim.people import PERSON_COLLISION_TYPE, Walker, circles_of
+from abcwc.sim.people import LOOK_AHEAD, PASSING_CLEARANCE, PERSON_COLLISION_TYPE, Walker, circles_of
+from abcwc.sim.raycast import visible_segments
 from abcwc.sim.sensors import Encoders, Gyro, IrRing, ScanSensor, Sonar
 from abcwc.sim.world import World, load_world
 from abcwc.types import LaserScan, Pose2D, PotCommand, SensorFrame, StatusFlags, Twist
@@ -76,6 +77,17 @@ class SimBase(BodyMixin):
             ScanSensor(p.depth_scan, rngs[5], depth_noise=True) if depth_scan else None
         )
         self._build_space(self._start_pose(start), people)
+        # what each sensor can see of the walls and objects from its height (static)
+        w = self.world
+        self._seen = {
+            "sonar": visible_segments(w.walls, w.bands, p.sonar.height,
+                                      p.sonar.vertical_half_angle),
+            "ir": visible_segments(w.walls, w.bands, p.ir.height, 0.0),
+            "lidar": visible_segments(w.walls, w.bands, p.lidar.height,
+                                      p.lidar.vertical_half_angle),
+            "depth_scan": visible_segments(w.walls, w.bands, p.depth_scan.height,
+                                           p.depth_scan.vertical_half_angle),
+        }
         self.t = 0.0
         self.steps = 0
         self.joystick = (p.joystick_centre, p.joystick_centre)
@@ -225,8 +237,7 @@ class SimBase(BodyMixin):
         self._control.angular_velocity = motion.w
         sub = dt / PHYSICS_SUBSTEPS
         for walker in self.walkers:
-            gap = self._chair_shape.point_query(walker.body.position).distance - walker.spec.radius
-            walker.steer(dt, touching=gap <= 0.005)
+            walker.steer(dt, *self._walker_sees_chair(walker))
         for _ in range(PHYSICS_SUBSTEPS):
             self.space.step(sub)
         self.steps += 1
@@ -236,20 +247,37 @@ class SimBase(BodyMixin):
         self._frame = self._make_frame(gyro_z)
         return self._frame
 
+    def _walker_sees_chair(self, walker: Walker) -> tuple[bool, bool]:
+        """(touching, way_blocked) for one walker: in contact with the chair now, and the
+        chair within ``LOOK_AHEAD`` of its body along the way it is walking."""
+        position = walker.body.position
+        gap = self._chair_shape.point_query(position).distance - walker.spec.radius
+        # the body, widened by the passing clearance, swept from its front to LOOK_AHEAD
+        # beyond (a chair touching it from behind is not "in the way")
+        hx, hy = walker.heading()
+        width = 0.95 * walker.spec.radius + PASSING_CLEARANCE
+        start = walker.spec.radius
+        reach = max(walker.spec.radius + LOOK_AHEAD - width, start)
+        near = (position.x + hx * start, position.y + hy * start)
+        ahead = (position.x + hx * reach, position.y + hy * reach)
+        seen = self._chair_shape.segment_query(near, ahead, width)
+        return gap <= 0.005, seen is not None
+
     def _read_slow_sensors(self, force: bool = False) -> None:
         """10 Hz sensors, staggered over the five periods of each 100 ms."""
         phase = self.steps % 5
         pose = self.pose
-        walls = self.world.walls
+        seen = self._seen
         circles = circles_of(self.walkers)
         if force or phase == 0:
-            self._sonar_reading = self.sonar.read(pose, walls, circles)
+            self._sonar_reading = self.sonar.read(pose, seen["sonar"], circles)
         if force or phase == 1:
-            self._ir_reading = self.ir.read(pose, walls, circles)
+            self._ir_reading = self.ir.read(pose, seen["ir"], circles)
         if self.lidar is not None and (force or phase == 2):
-            self._last_scan["lidar"] = self.lidar.read(pose, walls, circles, self.t)
+            self._last_scan["lidar"] = self.lidar.read(pose, seen["lidar"], circles, self.t)
         if self.depth_camera is not None and (force or phase == 3):
-            self._last_scan["depth_scan"] = self.depth_camera.read(pose, walls, circles, self.t)
+            self._last_scan["depth_scan"] = self.depth_camera.read(
+                pose, seen["depth_scan"], circles, self.t)
 
     def _make_frame(self, gyro_z: float) -> SensorFrame:
         left, right = self.encoders.counts

@@ -8,10 +8,17 @@ A world file (``data/worlds/<name>.json``) holds::
       "walls": [[[x, y], [x, y], ...], ...],      # polylines, metres
       "places": {"start": [x, y, theta], ...},     # theta in rad; "start" is required
       "people": [{"name": "ana", "path": [[x, y], ...], "speed": 0.8,
-                  "radius": 0.25, "loop": true}]   # optional
+                  "radius": 0.25, "loop": true}],  # optional
+      "objects": [{"name": "table top", "outline": [[x, y], ...],
+                   "z": [0.70, 0.75]}]             # optional
     }
 
 Every wall polyline becomes straight segments; a closed shape repeats its first point.
+Walls stand from the floor to ``WALL_HEIGHT``. An object is an outline standing between
+two heights ``z`` (m): a table is a top at 0.70-0.75 m over four legs from the floor
+(:func:`table`). A sensor sees an object only where its view at that height reaches it
+(a planar lidar at its mount height, a depth camera's band of rows); the chair collides
+with every wall and object (each is below the seated person's head).
 """
 
 from __future__ import annotations
@@ -25,6 +32,9 @@ import numpy as np
 
 from abcwc.paths import data_dir, read_document
 from abcwc.types import Pose2D
+
+WALL_HEIGHT = 2.5
+"""m: walls stand from the floor to this height."""
 
 
 class WorldError(ValueError):
@@ -44,7 +54,9 @@ class PersonSpec:
 
 @dataclass(frozen=True)
 class World:
-    """Static walls (N, 4: x1 y1 x2 y2), named places and people."""
+    """Static segments (N, 4: x1 y1 x2 y2), each standing between two heights (``bands``,
+    N x 2: bottom and top, m; walls from the floor to ``WALL_HEIGHT``), named places
+    and people."""
 
     name: str
     walls: np.ndarray
@@ -52,6 +64,11 @@ class World:
     people: tuple[PersonSpec, ...] = ()
     description: str = ""
     source: Path | None = field(default=None, compare=False)
+    bands: np.ndarray | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.bands is None:
+            object.__setattr__(self, "bands", np.tile([0.0, WALL_HEIGHT], (len(self.walls), 1)))
 
     @property
     def start(self) -> Pose2D:
@@ -91,23 +108,34 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
         raise WorldError(
             f"{label}: missing {', '.join(sorted(missing))} (need name, walls, places)"
         )
-    unknown = raw.keys() - {"name", "walls", "places", "people", "description"}
+    unknown = raw.keys() - {"name", "walls", "places", "people", "objects", "description"}
     if unknown:
         raise WorldError(
             f"{label}: unknown key(s) {', '.join(sorted(unknown))}; "
-            "allowed: name, description, walls, places, people"
+            "allowed: name, description, walls, places, people, objects"
         )
-    segments = []
     if not isinstance(raw["walls"], list) or not raw["walls"]:
         raise WorldError(f"{label}: walls must be a non-empty list of polylines")
+    segments = []
     for i, line in enumerate(raw["walls"]):
-        if not isinstance(line, list) or len(line) < 2:
-            raise WorldError(f"{label}: walls[{i}] must be a list of at least 2 points")
-        pts = [_point(p, f"{label}: walls[{i}]") for p in line]
-        for a, b in zip(pts, pts[1:]):
-            if a == b:
-                raise WorldError(f"{label}: walls[{i}] has a zero-length segment at {a}")
-            segments.append((*a, *b))
+        segments += _polyline_segments(line, f"{label}: walls[{i}]")
+    bands = [(0.0, WALL_HEIGHT)] * len(segments)
+    objects = raw.get("objects", [])
+    if not isinstance(objects, list):
+        raise WorldError(f"{label}: objects must be a list of {{outline, z}} objects")
+    for i, thing in enumerate(objects):
+        where = f"{label}: objects[{i}]"
+        if not isinstance(thing, dict) or not {"outline", "z"} <= thing.keys():
+            raise WorldError(f"{where} must be an object with an outline and z [bottom, top]")
+        outline = _polyline_segments(thing["outline"], where)
+        z = thing["z"]
+        if (not isinstance(z, list) or len(z) != 2
+                or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in z)
+                or not 0 <= z[0] < z[1]):
+            raise WorldError(f"{where}: z must be [bottom, top] in m with 0 <= bottom < top,"
+                             f" got {z!r}")
+        segments += outline
+        bands += [(float(z[0]), float(z[1]))] * len(outline)
     places = {}
     if not isinstance(raw["places"], dict):
         raise WorldError(f"{label}: places must be an object of name: [x, y, theta]")
@@ -150,7 +178,45 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
         people=tuple(people),
         description=str(raw.get("description", "")),
         source=source,
+        bands=np.array(bands, dtype=float),
     )
+
+
+def _polyline_segments(line: object, where: str) -> list[tuple[float, float, float, float]]:
+    if not isinstance(line, list) or len(line) < 2:
+        raise WorldError(f"{where} must be a list of at least 2 points")
+    pts = [_point(p, where) for p in line]
+    segments = []
+    for a, b in zip(pts, pts[1:]):
+        if a == b:
+            raise WorldError(f"{where} has a zero-length segment at {a}")
+        segments.append((*a, *b))
+    return segments
+
+
+def table(centre: tuple[float, float], size: tuple[float, float] = (1.2, 0.8),
+          yaw: float = 0.0, top: tuple[float, float] = (0.70, 0.75),
+          leg: float = 0.05, name: str = "table") -> list[dict]:
+    """World ``objects`` of a table: a top of ``size`` (m, length x width) between the
+    heights ``top`` (m) over four square legs of side ``leg`` (m) at its corners, centred
+    at ``centre`` and turned by ``yaw`` (rad)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+
+    def outline(cx: float, cy: float, half_x: float, half_y: float) -> list[list[float]]:
+        corners = [(-half_x, -half_y), (half_x, -half_y), (half_x, half_y),
+                   (-half_x, half_y), (-half_x, -half_y)]
+        return [[centre[0] + c * (cx + x) - s * (cy + y), centre[1] + s * (cx + x) + c * (cy + y)]
+                for x, y in corners]
+
+    half_x, half_y = size[0] / 2, size[1] / 2
+    things = [{"name": f"{name} top", "outline": outline(0, 0, half_x, half_y),
+               "z": [top[0], top[1]]}]
+    for k, (sx, sy) in enumerate(((1, 1), (-1, 1), (-1, -1), (1, -1))):
+        things.append({"name": f"{name} leg {k}",
+                       "outline": outline(sx * (half_x - leg / 2), sy * (half_y - leg / 2),
+                                          leg / 2, leg / 2),
+                       "z": [0.0, top[0]]})
+    return things
 
 
 def box_world(width: float = 40.0, height: float = 40.0, extra: list | None = None,

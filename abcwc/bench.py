@@ -238,7 +238,7 @@ def bench_slam() -> dict[str, float]:
             continue
         log = read_carmen_log(folder / f"{name}.clf.gz", **facts)
         result = run_slam(log)
-        errors = relation_errors(result.scan_poses,
+        errors = relation_errors(result.laser_poses,
                                  read_relations(folder / f"{name}.relations", log.stamps))
         figures[f"{name}: seconds"] = result.seconds
         figures[f"{name}: x faster than recorded"] = (log.stamps[-1] - log.stamps[0]) / \

@@ -96,7 +96,7 @@ def _slam(args: argparse.Namespace) -> int:
     print(f"{len(log)} scans, {len(result.keyframes)} keyframes, {result.loops} loop closures "
           f"in {result.seconds:.1f} s ({duration / result.seconds:.0f}x faster than recorded)")
     if relations is not None:
-        print(format_relation_errors(relation_errors(result.scan_poses, relations)))
+        print(format_relation_errors(relation_errors(result.laser_poses, relations)))
     print(f"wrote {out / 'map.yaml'}, {out / 'map.pgm'} and {out / 'trajectory.txt'}")
     return 0
 

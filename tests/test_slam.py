@@ -1,10 +1,6 @@
 """Graph SLAM on real laser logs: it beats odometry, and closing loops is what does it."""
 
-import gzip
 import math
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -54,48 +50,75 @@ def test_on_aces_slam_beats_odometry_and_loop_closure_is_why(aces):
     odometry = relation_errors(log.odometry, relations).translational_mean
     alone = run_slam(log, SlamSettings(loop_radius=0.0))
     full = run_slam(log)
-    without = relation_errors(alone.scan_poses, relations).translational_mean
-    with_loops = relation_errors(full.scan_poses, relations).translational_mean
+    without = relation_errors(alone.laser_poses, relations).translational_mean
+    with_loops = relation_errors(full.laser_poses, relations).translational_mean
     assert alone.loops == 0 and full.loops > 100
     assert with_loops < 0.5 * without < odometry
-    assert with_loops <= 0.060
+    assert with_loops <= 0.045  # GMapping 0.060, Cartographer 0.0375
     recorded = log.stamps[-1] - log.stamps[0]
     assert full.seconds < recorded / 10  # at least ten times faster than it was recorded
 
 
-def test_the_command_line_on_an_excerpt(tmp_path):
-    """The first 400 scans of MIT CSAIL (an excerpt made here) with the relations inside
-    them: files written, the two error lines in their exact form; a bad log: one line."""
-    lines, kept = gzip.open(slam_file("mit-csail.clf.gz"), "rt").read().splitlines(), []
-    scans = 0
-    for line in lines:
-        if line.startswith("FLASER"):
-            scans += 1
-            if scans > 400:
-                break
-        kept.append(line)
-    log_path = tmp_path / "excerpt.clf"
-    log_path.write_text("\n".join(kept) + "\n")
-    stamps = read_carmen_log(log_path).stamps
-    relations = [line for line in slam_file("mit-csail.relations").read_text().splitlines()
-                 if all(stamps[0] - 1e-6 <= float(t) <= stamps[-1] + 1e-6
-                        for t in line.split()[:2])]
-    (tmp_path / "excerpt.relations").write_text("\n".join(relations) + "\n")
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    run = subprocess.run([sys.executable, "-m", "abcwc.cli", "slam", str(log_path),
-                          "--relations", str(tmp_path / "excerpt.relations"),
-                          "--out", str(tmp_path / "out"), "--quiet"],
-                         capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
-    assert run.returncode == 0, run.stderr
-    out = run.stdout.splitlines()
-    assert any(line.startswith("translational error: ") and line.endswith(" m") for line in out)
-    assert any(line.startswith("rotational error: ") and line.endswith(" deg") for line in out)
-    for name in ("map.yaml", "map.pgm", "trajectory.txt"):
-        assert (tmp_path / "out" / name).is_file()
-    assert np.loadtxt(tmp_path / "out" / "trajectory.txt").shape == (400, 4)
-    bad = tmp_path / "bad.clf"
-    bad.write_text("FLASER 3 1.0 1.0\n")
-    run = subprocess.run([sys.executable, "-m", "abcwc.cli", "slam", str(bad), "--quiet"],
-                         capture_output=True, text=True, cwd=ROOT, env=env, timeout=60)
-    assert run.returncode == 2 and "Traceback" not in run.stderr
-    assert run.stderr.startswith("abcwc: error: ") and len(run.stderr.splitlines()) == 1
+@pytest.mark.parametrize(("name", "gmapping"), [("mit-csail", 0.049), ("fr079", 0.061)])
+def test_the_other_logs_at_or_below_gmapping(name, gmapping):
+    """MIT CSAIL (odometry that misreads fast turns by a third) and FR079 (raw odometry
+    6.5 m off on the relations): the same settings as ACES, at or below GMapping's
+    published error, at least ten times faster than recorded."""
+    log = read_carmen_log(slam_file(f"{name}.clf.gz"), **LOG_FACTS[name])
+    relations = read_relations(slam_file(f"{name}.relations"), log.stamps)
+    result = run_slam(log)
+    errors = relation_errors(result.laser_poses, relations)
+    assert errors.translational_mean <= gmapping
+    assert errors.rotational_mean_deg < 1.0
+    assert result.seconds < (log.stamps[-1] - log.stamps[0]) / 10
+
+
+def test_scans_between_keyframes_start_from_the_keyframes_either_side():
+    """Half-way in time between two keyframes a scan starts half-way along their
+    relative motion, whatever odometry says (here: that the robot stood still)."""
+    from abcwc.mapping.slam import _interpolated
+
+    keyframes = np.array([0, 2])
+    poses = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.4]])
+    odometry = np.zeros((4, 3))
+    stamps = np.array([0.0, 1.0, 2.0, 3.0])
+    start = _interpolated(poses, keyframes, odometry, stamps)
+    assert start[1] == pytest.approx([0.5, 0.0, 0.2], abs=0.03)
+    assert start[2] == pytest.approx(poses[1]) and start[3] == pytest.approx(poses[1])
+
+
+@pytest.mark.parametrize(("first", "second"), [(117, 121), (266, 268), (802, 803),
+                                              (1432, 1433), (1892, 1894)])
+def test_a_turn_odometry_misread_is_found_by_the_search(first, second):
+    """MIT CSAIL's odometry misreads these turns by 16-22 degrees: ICP started there
+    lands 0.4-1.5 m/rad from the benchmark's own relation between the two scans; the
+    sequential match (ICP, then the correlative search and ICP again where too few
+    points pair) lands within 0.1."""
+    from abcwc.geometry import relative
+    from abcwc.mapping.slam import _match, _match_sequential, thin
+
+    log = _csail()
+    relations = read_relations(slam_file("mit-csail.relations"), log.stamps)
+    row = np.flatnonzero((relations.first == first) & (relations.second == second))[0]
+    truth = relations.reference[row]
+    odometry = np.asarray(log.odometry)
+    guess = np.asarray(relative(odometry[first], odometry[second]))
+    settings = SlamSettings()
+    submap = thin(log.points(first, frame="base"), settings.point_spacing)
+    points = thin(log.points(second, frame="base"), settings.point_spacing)
+
+    def off(result):
+        return math.hypot(*(result.pose[:2] - truth[:2])) + abs(result.pose[2] - truth[2])
+
+    alone = _match(points, submap, guess, settings)
+    assert off(alone) > 0.4
+    assert off(_match_sequential(points, submap, guess, settings)) < 0.1
+
+
+_CSAIL = []
+
+
+def _csail():
+    if not _CSAIL:
+        _CSAIL.append(read_carmen_log(slam_file("mit-csail.clf.gz"), **LOG_FACTS["mit-csail"]))
+    return _CSAIL[0]

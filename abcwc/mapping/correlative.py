@@ -123,14 +123,26 @@ def correlative_match(points: np.ndarray, field: LikelihoodField,
     base = field.to_cell_units(initial[:2])  # the initial translation, in cells
 
     rotated = []
-    bounds = []
     for theta in angles:
         c, s = math.cos(theta), math.sin(theta)
         xy = points @ np.array([[c, s], [-s, c]])  # rotate by theta
-        cells = np.floor(xy / res + base).astype(np.int64)
-        rotated.append(cells)
-        bounds.append(field.scores(bound, cells, coarse))
-    bounds = np.array(bounds)  # (angles, coarse translations)
+        rotated.append(np.floor(xy / res + base).astype(np.int64))
+    # pad both tables so that every point of every pose falls on them: no bounds checks
+    # in the inner loop (a point off the field scores the floor, as the padding does)
+    low = np.min([cells.min(axis=0) for cells in rotated], axis=0) - half - factor
+    high = np.max([cells.max(axis=0) for cells in rotated], axis=0) + half + factor
+    pad_col = (max(0, -int(low[0])), max(0, int(high[0]) - field.width + 1))
+    pad_row = (max(0, -int(low[1])), max(0, int(high[1]) - field.height + 1))
+    fine_table = np.pad(field.table, (pad_row, pad_col), constant_values=field.floor)
+    bound_table = np.pad(bound, (pad_row, pad_col), constant_values=field.floor)
+    offset = np.array([pad_col[0], pad_row[0]])
+    rotated = [cells + offset for cells in rotated]
+
+    def scores(table: np.ndarray, cells: np.ndarray, shifts: np.ndarray) -> np.ndarray:
+        moved = cells[None, :, :] + shifts[:, None, :]
+        return table[moved[..., 1], moved[..., 0]].sum(axis=1)
+
+    bounds = np.array([scores(bound_table, cells, coarse) for cells in rotated])
 
     best_score, best = -math.inf, (0, np.zeros(2, dtype=np.int64))
     evaluated = 0
@@ -142,11 +154,12 @@ def correlative_match(points: np.ndarray, field: LikelihoodField,
             break  # every coarse pose left is bounded below the best fine one
         shifts = coarse[t] + fine
         shifts = shifts[(np.abs(shifts) <= half).all(axis=1)]
-        scores = field.scores(field.table, rotated[a], shifts)
+        fine_scores = scores(fine_table, rotated[a], shifts)
         evaluated += len(shifts)
-        k = int(np.argmax(scores))
-        if scores[k] > best_score:
-            best_score, best = float(scores[k]), (int(a), shifts[k])
+        k = int(np.argmax(fine_scores))
+        if fine_scores[k] > best_score:
+            best_score, best = float(fine_scores[k]), (int(a), shifts[k])
+    rotated = [cells - offset for cells in rotated]
     a, shift = best
     pose = np.array([initial[0] + shift[0] * res, initial[1] + shift[1] * res,
                      wrap_angle(angles[a])])
@@ -160,18 +173,20 @@ def _covariance(field: LikelihoodField, rotated: list[np.ndarray], angles: np.nd
                 a: int, shift: np.ndarray, best: float, res: float, cells: int,
                 initial: np.ndarray) -> np.ndarray:
     """Olson's eqn 15 over the fine poses within ``cells`` cells and angle steps of the
-    best, each weighted by ``exp(score - best)``."""
+    best, each weighted by ``exp(score - best)`` (``best`` the highest score among them:
+    the neighbourhood reaches past the window's edge, where a pose may score higher than
+    the window's best), taken about the best pose so the sums stay well scaled."""
     offsets = np.arange(-cells, cells + 1)
     shifts = shift + np.stack(np.meshgrid(offsets, offsets, indexing="xy"),
                               axis=-1).reshape(-1, 2)
-    poses, weights = [], []
+    poses, all_scores = [], []
     for k in range(max(0, a - cells), min(len(angles), a + cells + 1)):
-        scores = field.scores(field.table, rotated[k], shifts)
-        poses.append(np.column_stack([initial[0] + shifts[:, 0] * res,
-                                      initial[1] + shifts[:, 1] * res,
-                                      np.full(len(shifts), angles[k])]))
-        weights.append(np.exp(scores - best))
-    x, p = np.vstack(poses), np.concatenate(weights)
+        all_scores.append(field.scores(field.table, rotated[k], shifts))
+        poses.append(np.column_stack([(shifts[:, 0] - shift[0]) * res,
+                                      (shifts[:, 1] - shift[1]) * res,
+                                      np.full(len(shifts), angles[k] - angles[a])]))
+    scores = np.concatenate(all_scores)
+    x, p = np.vstack(poses), np.exp(scores - max(best, float(scores.max())))
     s = p.sum()
     u = p @ x
     second = (x * p[:, None]).T @ x

@@ -150,7 +150,9 @@ def _nearest_scans(path: Path, numbers: list[int], wanted: np.ndarray,
 
 
 def relation_errors(poses: np.ndarray, relations: Relations) -> RelationErrors:
-    """The relation errors of ``poses`` ``(N, 3)``, one per scan of the log (m, rad).
+    """The relation errors of ``poses`` ``(N, 3)``, one per scan of the log (m, rad):
+    the scans' own poses, the laser's (a relation is "the pose of the scan stamped t2 in
+    the frame of the scan stamped t1"; ``SlamResult.laser_poses``).
 
     ``epsilon = delta (-) delta*`` with ``delta = relative(poses[first], poses[second])``
     (Kümmerle et al. 2009); the answer holds ``|trans(epsilon)|`` and

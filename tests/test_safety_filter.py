@@ -102,6 +102,25 @@ def test_readings_beside_the_strip_or_missing_do_not_stop_and_too_close_does():
     assert safety.apply(blind, Twist(0.5, 0.0), t).v == 0.0
 
 
+def test_a_sonar_at_its_minimum_stops_even_a_creeping_chair():
+    """The MaxSonar reads 0.30 m for anything nearer: the thing may be touching the
+    chair's front. Taking the reading at face value (0.25 m ahead of the front) let a
+    chair creeping at 0.1 m/s (braking distance under 0.25 m) drive its tray into a
+    table top."""
+    t = 10.0
+    assert _moving_filter(0.1).braking_distance(0.1) < 0.25
+    minimum = P.sonar.min_range
+    assert _moving_filter(0.1).apply(make_frame(t, sonar=minimum), Twist(0.1, 0.0), t).v == 0.0
+    # backing away is still allowed, and a reading beyond the minimum lets it creep on
+    backing = SafetyFilter()
+    for k in range(100):
+        now = k * DT
+        out = backing.apply(make_frame(now, sonar=minimum), Twist(-0.1, 0.0), now)
+    assert out.v == pytest.approx(-0.1)
+    assert _moving_filter(0.1).apply(make_frame(t, sonar=minimum + 0.5), Twist(0.1, 0.0),
+                                     t).v > 0.0
+
+
 def test_reversing_is_stopped_by_the_rear_ir_and_forward_is_not():
     safety = SafetyFilter()
     t = 0.0

@@ -15,9 +15,13 @@ command an autonomous behaviour wants (a :class:`~abcwc.types.Twist`) and the ne
 4. **Obstacle stop.** Each range reading (the sonar's cone, the six IR rangers) is put
    in base_link; if it lies in the strip the chair will sweep (its width plus a margin,
    ahead when driving forward, behind when reversing) nearer than the braking distance
-   at the current speed, the motion along that way is stopped at once. A reading of
-   ``-inf`` (closer than the sensor can measure) counts as at its minimum range; NaN
-   (no reading, as the real chair's unwired IR ring) as nothing.
+   at the current speed, the motion along that way is stopped at once. A reading at or
+   below the sensor's minimum range (the MaxSonar reports 0.30 m for anything nearer;
+   the IR rangers ``-inf``) says only that something is *at most* that far: from a
+   sensor facing within 60 degrees of the way the chair is going, it counts as touching
+   the chair's edge (creeping forward while the sonar reads its minimum put the chair's
+   tray into a table top). NaN (no reading, as the real chair's unwired IR ring) counts
+   as nothing.
 5. **Acceleration and jerk limits**: the speed follows the wanted one with a
    jerk-limited ramp, the turn rate with an acceleration-limited one. Stops by rules 1,
    2 and 4 skip the ramp: the chair's own motor controller brakes.
@@ -148,7 +152,12 @@ class SafetyFilter:
             reading = frame.readings.get(frame_id, math.nan)
             if reading is None or math.isnan(reading) or reading == math.inf:
                 continue
-            distance = min_range if reading == -math.inf else float(reading)
+            if reading == -math.inf or reading <= min_range:  # somewhere nearer than min
+                facing = math.cos(mount[2]) if forward else -math.cos(mount[2])
+                if facing >= 0.5 - 1e-9 and nearest > 0.0:
+                    nearest, seen_by = 0.0, frame_id
+                continue
+            distance = float(reading)
             yaws = mount[2] + np.array([-half_angle, 0.0, half_angle])
             x = mount[0] + distance * np.cos(yaws)
             y = mount[1] + distance * np.sin(yaws)

@@ -52,11 +52,12 @@ class RangeSensorParams:
     @property
     def vertical_half_angle(self) -> float:
         """Half the vertical spread (rad) the sensor sees: a depth scan's band of
-        ``scan_height_px`` of ``image_height_px`` rows (depthimage_to_laserscan), a
-        sonar's cone (``half_angle_deg``), or 0 for a planar lidar or a thin IR beam."""
+        ``scan_height_px`` of ``image_height_px`` rows (depthimage_to_laserscan) through
+        a pinhole, ``atan(tan(vfov / 2) scan_height / image_height)``, a sonar's cone
+        (``half_angle_deg``), or 0 for a planar lidar or a thin IR beam."""
         if self.scan_height_px:
-            return math.radians(self.vertical_fov_deg) * self.scan_height_px \
-                / self.image_height_px / 2
+            return math.atan(math.tan(math.radians(self.vertical_fov_deg) / 2)
+                             * self.scan_height_px / self.image_height_px)
         return math.radians(self.half_angle_deg)
 
 

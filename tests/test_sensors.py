@@ -164,9 +164,10 @@ def test_the_lidar_sees_a_tables_legs_and_the_depth_scan_its_top():
 
 
 def test_a_depth_scan_sees_a_top_only_from_where_its_rows_reach_it():
-    """A top from 1.00 to 1.05 m, above the camera (0.76 m): the band's upper edge rises
-    tan(8.5 deg) per metre, so it reaches 1.00 m at (1.00 - 0.76) / tan(8.5 deg) = 1.60 m
-    (and the sonar's 17-degree cone at (1.00 - 0.69) / tan(17 deg) = 1.01 m)."""
+    """A top from 1.00 to 1.05 m, above the camera (0.76 m): the band's upper edge (95
+    rows above the centre of 480, through a 43-degree pinhole) rises tan(21.5 deg) 95 /
+    240 = 0.156 per metre, so it reaches 1.00 m at 0.24 / 0.156 = 1.54 m (and the
+    sonar's 17-degree cone at (1.00 - 0.69) / tan(17 deg) = 1.01 m)."""
     from abcwc.sim.raycast import visible_segments
 
     p = noise_free()
@@ -175,7 +176,7 @@ def test_a_depth_scan_sees_a_top_only_from_where_its_rows_reach_it():
     seen = visible_segments(segments, bands, p.depth_scan.height,
                             p.depth_scan.vertical_half_angle)
     reach = (1.00 - p.depth_scan.height) / math.tan(p.depth_scan.vertical_half_angle)
-    assert reach == pytest.approx((1.00 - 0.76) / math.tan(math.radians(43 * 190 / 480 / 2)))
+    assert reach == pytest.approx((1.00 - 0.76) / (math.tan(math.radians(21.5)) * 95 / 240))
     np.testing.assert_allclose(seen[:, 4], reach)
     # the near top (1 m) is closer than the reach and is not seen; the far one (2 m) is
     assert ray_segment_distances(np.zeros(2), np.array([0.0]), seen)[0] == pytest.approx(2.0)
@@ -198,3 +199,41 @@ def test_the_chair_runs_into_a_table_top_it_cannot_pass_under():
     assert log.collisions[-1] >= 1
     front = chair.params.length - chair.params.axle_to_rear
     assert chair.pose.x + front == pytest.approx(4.4, abs=0.02)
+
+
+def test_a_rendered_depth_image_made_into_a_scan_is_the_simulators_depth_scan():
+    """Two ways to the Kinect's fake scan agree: the simulator's own (each segment seen
+    from where the band of rows reaches its heights) and a depth image rendered pixel
+    by pixel and turned into a scan as depthimage_to_laserscan does. Looking at the
+    table from 1.5 m, the top's edge; a low box beside it that the band reaches only
+    from further away is missing from both."""
+    from abcwc.perception import depth_image_to_scan
+    from abcwc.sim.depth_camera import kinect_camera, render_depth
+    from abcwc.sim.world import table, world_from_dict
+
+    box = {"name": "box", "outline": [[4.3, 2.0], [4.6, 2.0], [4.6, 2.3], [4.3, 2.3],
+                                      [4.3, 2.0]], "z": [0.0, 0.3]}
+    world = world_from_dict({
+        "name": "room", "walls": [[[0, 0], [8, 0], [8, 6], [0, 6], [0, 0]]],
+        "places": {"start": [2.6, 3.0, 0.0]}, "objects": table((5.0, 3.0)) + [box]})
+    chair = SimBase(world=world, errors="ideal", params=noise_free(), depth_scan=True,
+                    people=False)
+    p = chair.params.depth_scan
+    simulated = chair.read().depth_scan
+    camera = kinect_camera(p)
+    image = render_depth(camera, chair.pose, p.mount, p.height, world.walls, world.bands,
+                         np.zeros((0, 3)), p.min_range, p.max_range)
+    rendered = depth_image_to_scan(image, camera, p.scan_height_px, p.min_range, p.max_range)
+    # compare at the rendered scan's beams, by the simulated scan's nearest beam
+    index = np.rint((rendered.angles - simulated.angle_min) / simulated.angle_increment)
+    pairs = np.isfinite(rendered.ranges)
+    assert pairs.sum() > 100
+    np.testing.assert_allclose(rendered.ranges[pairs],
+                               simulated.ranges[index[pairs].astype(int)], atol=0.01)
+    # the box (0.3 m tall, 1.7 m ahead and to the right) is in neither: the band's lower
+    # edge reaches 0.3 m only (0.76 - 0.3) / 0.156 = 2.9 m out
+    bearing = math.atan2(2.15 - 3.0, 4.3 - 2.9)
+    beam = int(np.argmin(np.abs(rendered.angles - bearing)))
+    assert rendered.ranges[beam] > 2.0
+    sim_beam = int(np.argmin(np.abs(simulated.angles - bearing)))
+    assert simulated.ranges[sim_beam] > 2.0

@@ -24,7 +24,13 @@ from abcwc.control.interface_board import InterfaceBoard
 from abcwc.geometry import wrap_angle
 from abcwc.params import ChairParams, default_params
 from abcwc.sim.motor import ChairErrors, MotorController, resolve_errors
-from abcwc.sim.people import LOOK_AHEAD, PASSING_CLEARANCE, PERSON_COLLISION_TYPE, Walker, circles_of
+from abcwc.sim.people import (
+    LOOK_AHEAD,
+    PASSING_CLEARANCE,
+    PERSON_COLLISION_TYPE,
+    Walker,
+    circles_of,
+)
 from abcwc.sim.raycast import visible_segments
 from abcwc.sim.sensors import Encoders, Gyro, IrRing, ScanSensor, Sonar
 from abcwc.sim.world import World, load_world

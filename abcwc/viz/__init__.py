@@ -13,7 +13,13 @@ and for a moving picture, ``HTML(viz.to_html(viz.animate_run(log, chair.world)))
 """
 
 from abcwc.viz.animation import animate_run, frame_rows, save_animation, to_html
-from abcwc.viz.costmap import costmap_colours, plot_costmap, plot_dwa, plot_footprint
+from abcwc.viz.costmap import (
+    costmap_colours,
+    plot_costmap,
+    plot_dwa,
+    plot_footprint,
+    plot_occupancy,
+)
 from abcwc.viz.scene import (
     ChairArtist,
     chair_outlines,
@@ -48,6 +54,7 @@ __all__ = [
     "plot_costmap",
     "plot_dwa",
     "plot_footprint",
+    "plot_occupancy",
     "plot_log_scan",
     "plot_people",
     "plot_run",

@@ -13,6 +13,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 
+from abcwc.mapping.grid import OccupancyGrid
 from abcwc.navigation.costmap import INSCRIBED, LETHAL, NO_INFORMATION, Costmap, Footprint
 from abcwc.navigation.dwa import DwaResult
 from abcwc.viz._common import new_axes
@@ -39,6 +40,20 @@ def plot_costmap(costmap: Costmap, ax: Axes | None = None) -> Axes:
     extent = (x0, x0 + costmap.width * costmap.resolution,
               y0, y0 + costmap.height * costmap.resolution)
     ax.imshow(costmap.cost, cmap=costmap_colours(), vmin=0, vmax=255, origin="lower",
+              extent=extent, interpolation="nearest")
+    ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal")
+    return ax
+
+
+def plot_occupancy(grid: OccupancyGrid, ax: Axes | None = None) -> Axes:
+    """Draw an occupancy grid's p(occupied) (axis-aligned) as map_server's image does:
+    white free, black occupied, grey unknown (p = 0.5)."""
+    if abs(grid.origin.theta) > 1e-12:
+        raise ValueError("plot_occupancy draws axis-aligned grids (origin yaw 0)")
+    ax = new_axes(ax)
+    x0, y0 = grid.origin.x, grid.origin.y
+    extent = (x0, x0 + grid.width * grid.resolution, y0, y0 + grid.height * grid.resolution)
+    ax.imshow(grid.probability(), cmap="gray_r", vmin=0.0, vmax=1.0, origin="lower",
               extent=extent, interpolation="nearest")
     ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal")
     return ax

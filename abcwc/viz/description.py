@@ -8,6 +8,8 @@ hangs from which, as ``view_frames`` does for tf2.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.patches import Circle, Polygon
@@ -15,7 +17,8 @@ from scipy.spatial import ConvexHull
 
 from abcwc.description import RobotDescription, Shape
 from abcwc.frames import FrameTree
-from abcwc.viz._common import new_axes
+from abcwc.params import ChairParams
+from abcwc.viz._common import DEPTH_COLOR, IR_COLOR, LIDAR_COLOR, SONAR_COLOR, new_axes
 
 SHAPE_COLOURS = {"box": "0.80", "cylinder": "0.35", "sphere": "0.55"}
 SENSOR_COLOUR = "tab:red"
@@ -119,4 +122,55 @@ def plot_frame_tree(tree: FrameTree, ax: Axes | None = None, root: str | None = 
     ax.set_xlim(-1, next_leaf[0])
     ax.set_ylim(-max(d for _, d in positions.values()) - 0.8, 0.6)
     ax.axis("off")
+    return ax
+
+
+def plot_vertical_coverage(params: ChairParams, ax: Axes | None = None, reach: float = 4.0,
+                           objects: list[tuple[float, float, float, float, str]] | None = None
+                           ) -> Axes:
+    """What each forward range sensor sees in the vertical plane ahead of the chair (x
+    forward from base_link, z up, m): the lidar's plane, the IR ranger's beam, the
+    sonar's cone and the depth scan's band of rows, each from its mount and height over
+    its ranges (cut at ``reach`` m); ``objects`` as ``(x0, x1, z0, z1, label)``
+    rectangles."""
+    from matplotlib.patches import Rectangle
+
+    ax = new_axes(ax, figsize=(10, 3.5))
+    sensors = (
+        ("lidar", params.lidar, 0.0, LIDAR_COLOR),
+        ("depth scan", params.depth_scan, params.depth_scan.vertical_half_angle, DEPTH_COLOR),
+        ("sonar", params.sonar, params.sonar.vertical_half_angle, SONAR_COLOR),
+    )
+    for name, spec, half, colour in sensors:
+        x0, z0 = spec.mount[0], spec.height
+        near, far = spec.min_range, min(spec.max_range, reach)
+        slope = math.tan(half)
+        xs = np.array([near, far, far, near])
+        zs = np.array([near * slope, far * slope, -far * slope, -near * slope])
+        if half > 0:
+            ax.add_patch(Polygon(np.column_stack([x0 + xs, z0 + zs]), closed=True,
+                                 facecolor=colour, alpha=0.25, edgecolor=colour,
+                                 label=f"{name} ({spec.height:.2f} m)"))
+        else:
+            ax.plot([x0 + near, x0 + far], [z0, z0], color=colour, linewidth=2,
+                    label=f"{name} ({spec.height:.2f} m)")
+        ax.plot([x0, x0 + near], [z0, z0], ":", color=colour, linewidth=1)
+    ir_x = float(params.ir.mounts[0, 0])
+    ax.plot([ir_x + params.ir.min_range, ir_x + min(params.ir.max_range, reach)],
+            [params.ir.height] * 2, color=IR_COLOR, linewidth=2,
+            label=f"IR ranger ({params.ir.height:.2f} m)")
+    for x0, x1, z0, z1, label in objects or []:
+        ax.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, facecolor="0.45",
+                               edgecolor="k", linewidth=0.6))
+        ax.annotate(label, (x1, z1), xytext=(3, 3), textcoords="offset points", fontsize=8)
+    front = params.length - params.axle_to_rear
+    ax.add_patch(Rectangle((-params.axle_to_rear, 0.0), params.length, params.height,
+                           facecolor="none", edgecolor="0.3", linestyle="--"))
+    ax.annotate("chair", (front, params.height), xytext=(3, -10), textcoords="offset points",
+                fontsize=8, color="0.3")
+    ax.set_xlim(-params.axle_to_rear - 0.1, reach + 0.5)
+    ax.set_ylim(0.0, 1.6)
+    ax.set_xlabel("x ahead of base_link (m)")
+    ax.set_ylabel("height (m)")
+    ax.legend(loc="upper right", fontsize=8)
     return ax

@@ -1,0 +1,122 @@
+"""A depth camera in the simulator: the Kinect's depth image of a world of walls,
+objects between two heights, people and the floor.
+
+A pinhole camera looking straight ahead (no tilt) at ``height`` m: pixel ``(u, v)``
+sees along the direction ``((u - cx) / fx, (v - cy) / fy, 1)`` in the optical frame
+(x right, y down, z forward; REP 103's ``*_optical_frame``). In the plane, column ``u``
+is a ray at bearing ``-atan((u - cx) / fx)`` from the camera's heading; a wall segment
+it meets ``t`` m away (horizontally) fills the rows whose ray is at a height inside the
+segment's band there: ``height - t (v - cy) / fy`` between its bottom and top. Below
+the horizon the floor is seen at ``t = height fy / (v - cy)``. The pixel's value is the
+depth ``z`` (m, along the optical axis) of the nearest of these, as a Kinect reports
+it; ``nan`` where nothing is within ``max_range`` or nearer than ``min_range``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from abcwc.params import RangeSensorParams
+from abcwc.sim.raycast import cull_segments
+from abcwc.types import Pose2D
+
+PERSON_HEIGHT = 1.75
+"""m: walking people stand from the floor to this height."""
+
+
+@dataclass(frozen=True)
+class PinholeCamera:
+    """Intrinsics of an image ``width`` x ``height`` px with focal lengths ``fx``, ``fy``
+    and principal point ``cx``, ``cy`` (px)."""
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+
+    @classmethod
+    def from_fov(cls, width: int, height: int, horizontal_fov_deg: float,
+                 vertical_fov_deg: float) -> PinholeCamera:
+        """The camera whose image spans the given fields of view (degrees) edge to edge."""
+        fx = width / 2 / math.tan(math.radians(horizontal_fov_deg) / 2)
+        fy = height / 2 / math.tan(math.radians(vertical_fov_deg) / 2)
+        return cls(width, height, fx, fy, (width - 1) / 2, (height - 1) / 2)
+
+
+def kinect_camera(params: RangeSensorParams, width: int = 640) -> PinholeCamera:
+    """The chair's depth camera (``params.depth_scan``: its 57 x 43 degree view) at
+    ``width`` px across (640 as the Kinect; less for speed), 4:3."""
+    return PinholeCamera.from_fov(width, width * 3 // 4, params.fov_deg,
+                                  params.vertical_fov_deg)
+
+
+def render_depth(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float, float],
+                 height: float, segments: np.ndarray, bands: np.ndarray,
+                 circles: np.ndarray, min_range: float, max_range: float) -> np.ndarray:
+    """The depth image (height x width, m; ``nan`` for no return) of a camera at
+    ``height`` m on the chair at ``pose``, mounted at ``mount`` (x, y, yaw in base_link),
+    seeing wall ``segments`` (N, 4) standing between ``bands`` (N, 2), people
+    ``circles`` (M, 3: x, y, radius) from the floor to ``PERSON_HEIGHT``, and the floor."""
+    c, s = math.cos(pose.theta), math.sin(pose.theta)
+    origin = np.array([pose.x + c * mount[0] - s * mount[1],
+                       pose.y + s * mount[0] + c * mount[1]])
+    heading = pose.theta + mount[2]
+    u = np.arange(camera.width)
+    v = np.arange(camera.height)
+    lateral = (u - camera.cx) / camera.fx  # x / z of each column
+    bearing = heading - np.arctan(lateral)  # (W,): image x is to the right
+    slope = (v - camera.cy) / camera.fy  # (H,): downward per metre of z
+    # horizontal distance t along each column's ray to every segment and circle
+    near = cull_segments(np.column_stack([segments, bands]), origin,
+                         max_range * math.hypot(1.0, float(np.abs(lateral).max())))
+    walls, wall_bands = near[:, :4], near[:, 4:]
+    t_walls = _ray_segment_all(origin, bearing, walls)  # (W, N)
+    t_people = _ray_circle_all(origin, bearing, circles)  # (W, M)
+    hits = np.concatenate([t_walls, t_people], axis=1)
+    low = np.concatenate([wall_bands[:, 0], np.zeros(len(circles))])
+    high = np.concatenate([wall_bands[:, 1], np.full(len(circles), PERSON_HEIGHT)])
+    # z (along the axis) of a hit t m away horizontally: t cos(bearing - heading)
+    along = 1.0 / np.sqrt(1.0 + lateral**2)  # (W,) cos of each column's bearing offset
+    z_hits = hits * along[:, None]  # (W, K)
+    # the ray of row v is at height `height - slope z` when z m ahead
+    ray_height = height - slope[:, None, None] * z_hits[None, :, :]  # (H, W, K)
+    inside = (ray_height >= low) & (ray_height <= high) & np.isfinite(z_hits)[None]
+    depth = np.where(inside, z_hits[None], np.inf).min(axis=2)  # (H, W)
+    floor = np.where(slope > 0, height / np.where(slope > 0, slope, 1.0), np.inf)
+    depth = np.minimum(depth, floor[:, None])
+    depth[(depth > max_range) | (depth < min_range)] = np.nan
+    return depth
+
+
+def _ray_segment_all(origin: np.ndarray, angles: np.ndarray, segments: np.ndarray
+                     ) -> np.ndarray:
+    """(B, N): distance along each ray to each segment (inf where it misses)."""
+    if len(segments) == 0:
+        return np.zeros((len(angles), 0))
+    dx, dy = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    px, py = segments[:, 0] - origin[0], segments[:, 1] - origin[1]
+    ex, ey = segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / (dx * ey - dy * ex)
+        t = (px * ey - py * ex) * inv
+        s = (px * dy - py * dx) * inv
+    return np.where((t >= 0) & (s >= 0) & (s <= 1), t, np.inf)
+
+
+def _ray_circle_all(origin: np.ndarray, angles: np.ndarray, circles: np.ndarray
+                    ) -> np.ndarray:
+    """(B, M): distance along each ray to each circle's near side (inf where it misses)."""
+    if len(circles) == 0:
+        return np.zeros((len(angles), 0))
+    dx, dy = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    wx, wy = circles[:, 0] - origin[0], circles[:, 1] - origin[1]
+    along = dx * wx + dy * wy
+    off2 = wx * wx + wy * wy - along * along
+    with np.errstate(invalid="ignore"):
+        t = along - np.sqrt(circles[:, 2] ** 2 - off2)
+    return np.where((off2 <= circles[:, 2] ** 2) & (t >= 0), t, np.inf)

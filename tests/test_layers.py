@@ -1,4 +1,5 @@
-"""The README's layers: estimation and mapping import nothing from the layers above them."""
+"""The README's layers: estimation, mapping and perception import nothing from the layers
+above them."""
 
 import ast
 from pathlib import Path
@@ -23,7 +24,7 @@ def imported_modules(path: Path) -> list[str]:
     return names
 
 
-@pytest.mark.parametrize("layer", ["estimation", "mapping"])
+@pytest.mark.parametrize("layer", ["estimation", "mapping", "perception"])
 def test_a_lower_layer_imports_nothing_above_it(layer):
     """Estimators and mappers turn frames, scans and logs into estimates and maps: they
     depend on messages, geometry, logs and parameters only, never on a body, a behaviour

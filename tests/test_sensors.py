@@ -207,8 +207,8 @@ def test_a_rendered_depth_image_made_into_a_scan_is_the_simulators_depth_scan():
     by pixel and turned into a scan as depthimage_to_laserscan does. Looking at the
     table from 1.5 m, the top's edge; a low box beside it that the band reaches only
     from further away is missing from both."""
-    from abcwc.perception import depth_image_to_scan
-    from abcwc.sim.depth_camera import kinect_camera, render_depth
+    from abcwc.perception import depth_image_to_scan, kinect_camera
+    from abcwc.sim.depth_camera import render_depth
     from abcwc.sim.world import table, world_from_dict
 
     box = {"name": "box", "outline": [[4.3, 2.0], [4.6, 2.0], [4.6, 2.3], [4.3, 2.3],

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from abcwc.sim.depth_camera import PinholeCamera
+from abcwc.perception.camera import PinholeCamera
 from abcwc.types import LaserScan
 
 

@@ -219,8 +219,9 @@ def bench_navigator() -> dict[str, float]:
             "one decision, 95th percentile (ms)": sorted(decisions)[int(0.95 * len(decisions))]}
 
 
-@benchmark("slam", "graph SLAM on the shared benchmark logs: seconds, speed-up over the "
-           "recording, relation errors (deterministic: run once)", repeat=False)
+@benchmark("slam", "graph SLAM on the shared benchmark logs: seconds, scans per second, "
+           "speed-up over the recording, relation errors (deterministic: run once)",
+           repeat=False)
 def bench_slam() -> dict[str, float]:
     import sys
 
@@ -241,6 +242,7 @@ def bench_slam() -> dict[str, float]:
         errors = relation_errors(result.laser_poses,
                                  read_relations(folder / f"{name}.relations", log.stamps))
         figures[f"{name}: seconds"] = result.seconds
+        figures[f"{name}: scans per second"] = len(log) / result.seconds
         figures[f"{name}: x faster than recorded"] = (log.stamps[-1] - log.stamps[0]) / \
             result.seconds
         figures[f"{name}: translational error (m)"] = errors.translational_mean

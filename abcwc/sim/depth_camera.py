@@ -19,7 +19,8 @@ import math
 import numpy as np
 
 from abcwc.perception.camera import PinholeCamera
-from abcwc.sim.raycast import cull_segments
+from abcwc.sim.raycast import cull_segments, ray_circle_hits, ray_segment_hits
+from abcwc.sim.sensors import sensor_pose
 from abcwc.types import Pose2D
 
 PERSON_HEIGHT = 1.75
@@ -33,10 +34,7 @@ def render_depth(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float,
     ``height`` m on the chair at ``pose``, mounted at ``mount`` (x, y, yaw in base_link),
     seeing wall ``segments`` (N, 4) standing between ``bands`` (N, 2), people
     ``circles`` (M, 3: x, y, radius) from the floor to ``PERSON_HEIGHT``, and the floor."""
-    c, s = math.cos(pose.theta), math.sin(pose.theta)
-    origin = np.array([pose.x + c * mount[0] - s * mount[1],
-                       pose.y + s * mount[0] + c * mount[1]])
-    heading = pose.theta + mount[2]
+    origin, heading = sensor_pose(pose, mount)
     u = np.arange(camera.width)
     v = np.arange(camera.height)
     lateral = (u - camera.cx) / camera.fx  # x / z of each column
@@ -46,9 +44,8 @@ def render_depth(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float,
     near = cull_segments(np.column_stack([segments, bands]), origin,
                          max_range * math.hypot(1.0, float(np.abs(lateral).max())))
     walls, wall_bands = near[:, :4], near[:, 4:]
-    t_walls = _ray_segment_all(origin, bearing, walls)  # (W, N)
-    t_people = _ray_circle_all(origin, bearing, circles)  # (W, M)
-    hits = np.concatenate([t_walls, t_people], axis=1)
+    hits = np.concatenate([ray_segment_hits(origin, bearing, walls),  # (W, N)
+                           ray_circle_hits(origin, bearing, circles)], axis=1)  # (W, M)
     low = np.concatenate([wall_bands[:, 0], np.zeros(len(circles))])
     high = np.concatenate([wall_bands[:, 1], np.full(len(circles), PERSON_HEIGHT)])
     # z (along the axis) of a hit t m away horizontally: t cos(bearing - heading)
@@ -63,31 +60,3 @@ def render_depth(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float,
     depth[(depth > max_range) | (depth < min_range)] = np.nan
     return depth
 
-
-def _ray_segment_all(origin: np.ndarray, angles: np.ndarray, segments: np.ndarray
-                     ) -> np.ndarray:
-    """(B, N): distance along each ray to each segment (inf where it misses)."""
-    if len(segments) == 0:
-        return np.zeros((len(angles), 0))
-    dx, dy = np.cos(angles)[:, None], np.sin(angles)[:, None]
-    px, py = segments[:, 0] - origin[0], segments[:, 1] - origin[1]
-    ex, ey = segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / (dx * ey - dy * ex)
-        t = (px * ey - py * ex) * inv
-        s = (px * dy - py * dx) * inv
-    return np.where((t >= 0) & (s >= 0) & (s <= 1), t, np.inf)
-
-
-def _ray_circle_all(origin: np.ndarray, angles: np.ndarray, circles: np.ndarray
-                    ) -> np.ndarray:
-    """(B, M): distance along each ray to each circle's near side (inf where it misses)."""
-    if len(circles) == 0:
-        return np.zeros((len(angles), 0))
-    dx, dy = np.cos(angles)[:, None], np.sin(angles)[:, None]
-    wx, wy = circles[:, 0] - origin[0], circles[:, 1] - origin[1]
-    along = dx * wx + dy * wy
-    off2 = wx * wx + wy * wy - along * along
-    with np.errstate(invalid="ignore"):
-        t = along - np.sqrt(circles[:, 2] ** 2 - off2)
-    return np.where((off2 <= circles[:, 2] ** 2) & (t >= 0), t, np.inf)

@@ -63,15 +63,13 @@ def cull_segments(
     return segments[np.einsum("ij,ij->i", closest, closest) <= max_range * max_range]
 
 
-def ray_segment_distances(
+def ray_segment_hits(
     origin: np.ndarray, angles: np.ndarray, segments: np.ndarray
 ) -> np.ndarray:
-    """Distance (m) along each ray from ``origin`` at world ``angles`` (rad) to the
-    nearest segment; ``inf`` where a ray meets none. Shapes: origin (2,) shared by all
-    rays or (B, 2) one per ray, angles (B,), segments (N, 4), or (N, 5) with the
-    distance each is in view from (:func:`visible_segments`) -> (B,)."""
-    if len(segments) == 0:
-        return np.full(angles.shape, INF)
+    """(B, N): distance (m) along each ray from ``origin`` at world ``angles`` (rad) to
+    each segment, ``inf`` where it misses. Shapes: origin (2,) shared by all rays or
+    (B, 2) one per ray, angles (B,), segments (N, 4), or (N, 5) with the distance each is
+    in view from (:func:`visible_segments`)."""
     dx, dy = np.cos(angles)[:, None], np.sin(angles)[:, None]
     ox, oy = _origin_columns(origin)
     px, py = segments[:, 0] - ox, segments[:, 1] - oy
@@ -83,16 +81,25 @@ def ray_segment_distances(
     hit = (t >= 0.0) & (s >= 0.0) & (s <= 1.0)
     if segments.shape[1] > 4:
         hit &= t >= segments[:, 4]
-    return np.where(hit, t, INF).min(axis=1)
+    return np.where(hit, t, INF)
 
 
-def ray_circle_distances(
+def ray_segment_distances(
+    origin: np.ndarray, angles: np.ndarray, segments: np.ndarray
+) -> np.ndarray:
+    """(B,): distance along each ray to the nearest segment (:func:`ray_segment_hits`);
+    ``inf`` where a ray meets none."""
+    if len(segments) == 0:
+        return np.full(angles.shape, INF)
+    return ray_segment_hits(origin, angles, segments).min(axis=1)
+
+
+def ray_circle_hits(
     origin: np.ndarray, angles: np.ndarray, circles: np.ndarray
 ) -> np.ndarray:
-    """Distance along each ray to the nearest circle (M, 3: cx cy r); ``inf`` if none.
-    A circle that contains the origin is not seen (the ray starts inside it)."""
-    if len(circles) == 0:
-        return np.full(angles.shape, INF)
+    """(B, M): distance along each ray to each circle's near side (M, 3: cx cy r), ``inf``
+    where it misses. A circle that contains the origin is not seen (the ray starts
+    inside it)."""
     dx, dy = np.cos(angles)[:, None], np.sin(angles)[:, None]
     ox, oy = _origin_columns(origin)
     wx, wy = circles[:, 0] - ox, circles[:, 1] - oy
@@ -101,8 +108,17 @@ def ray_circle_distances(
     off2 = (wx * wx + wy * wy) - along * along
     with np.errstate(invalid="ignore"):
         t = along - np.sqrt(r2 - off2)
-    hit = (off2 <= r2) & (t >= 0.0)
-    return np.where(hit, t, INF).min(axis=1)
+    return np.where((off2 <= r2) & (t >= 0.0), t, INF)
+
+
+def ray_circle_distances(
+    origin: np.ndarray, angles: np.ndarray, circles: np.ndarray
+) -> np.ndarray:
+    """(B,): distance along each ray to the nearest circle (:func:`ray_circle_hits`);
+    ``inf`` if none."""
+    if len(circles) == 0:
+        return np.full(angles.shape, INF)
+    return ray_circle_hits(origin, angles, circles).min(axis=1)
 
 
 def ray_distances(

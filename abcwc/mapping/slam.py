@@ -276,20 +276,8 @@ def _match_sequential(points: np.ndarray, submap: np.ndarray, guess: np.ndarray,
     first = _match(points, submap, guess, s)
     if first is not None and first.fitness >= s.sequential_fitness:
         return first
-    if len(points) < 3 or len(submap) < 3:
-        return first
-    local = inverse_transform_points(guess, submap)
-    local = local[np.hypot(local[:, 0], local[:, 1]) < s.search_radius]
-    if len(local) < 3:
-        return first
-    field = LikelihoodField(local, resolution=0.05, sigma=0.05, margin=s.search_xy + 0.5)
-    near = thin(points[np.hypot(points[:, 0], points[:, 1]) < s.search_radius],
-                s.search_spacing)
-    if len(near) < 3:
-        return first
-    found = correlative_match(near, field, (0.0, 0.0, 0.0), window_xy=s.search_xy,
-                             window_theta=s.search_theta)
-    second = _match(points, submap, np.asarray(compose(guess, found.pose)), s)
+    second = _search(points, submap, guess, s, s.search_xy, s.search_theta,
+                     resolution=0.05, reach=s.search_radius)
     candidates = [r for r in (first, second) if r is not None]
     return max(candidates, key=lambda r: (r.fitness, -r.rms)) if candidates else None
 
@@ -328,26 +316,31 @@ def _close_loops(k: int, points: np.ndarray, poses: np.ndarray, submaps: _Submap
         result = _match(points, submap, poses[k], s)
         if (result is None or not _trustworthy(result, s)) and search:
             search = False  # one search per keyframe at most
-            result = _search(points, submap, poses[k], s,
-                             min(float(reach[candidate]), s.loop_search_xy))
+            window_xy = min(float(reach[candidate]), s.loop_search_xy)
+            result = _search(points, submap, poses[k], s, window_xy, s.loop_search_theta,
+                             resolution=0.1, reach=s.search_radius + window_xy)
         if result is not None and _trustworthy(result, s):
             closed.append((int(candidate), np.asarray(relative(poses[candidate], result.pose))))
     return closed
 
 
 def _search(points: np.ndarray, submap: np.ndarray, guess: np.ndarray, s: SlamSettings,
-            window_xy: float) -> IcpResult | None:
-    """The correlative matcher over ``+- window_xy`` m and ``loop_search_theta`` round
-    ``guess``, refined by ICP (None if either finds nothing)."""
+            window_xy: float, window_theta: float, resolution: float,
+            reach: float) -> IcpResult | None:
+    """The correlative matcher over ``+- window_xy`` m and ``+- window_theta`` rad round
+    ``guess``, on a table of ``resolution`` m cells of the submap's points within ``reach``
+    m of the guess, refined by ICP (None if either finds nothing). The scan is searched
+    thinned to ``search_spacing``, its points within ``search_radius``."""
     local = inverse_transform_points(guess, submap)
-    keep = np.hypot(local[:, 0], local[:, 1]) < s.search_radius + window_xy
+    keep = np.hypot(local[:, 0], local[:, 1]) < reach
     near = thin(points[np.hypot(points[:, 0], points[:, 1]) < s.search_radius],
                 s.search_spacing)
     if keep.sum() < 3 or len(near) < 3:
         return None
-    field = LikelihoodField(local[keep], resolution=0.1, sigma=0.1, margin=window_xy + 0.5)
+    field = LikelihoodField(local[keep], resolution=resolution, sigma=resolution,
+                            margin=window_xy + 0.5)
     found = correlative_match(near, field, (0.0, 0.0, 0.0), window_xy=window_xy,
-                              window_theta=s.loop_search_theta)
+                              window_theta=window_theta)
     return _match(points, submap, np.asarray(compose(guess, found.pose)), s)
 
 

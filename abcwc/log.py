@@ -3,7 +3,9 @@
 Every channel shares the time stamps of channel ``t``; ``log.ticks`` reads channel
 ``"ticks"``. :meth:`RunLog.save` writes one ``.npz`` file that :meth:`RunLog.load`
 reads back (this format, version 2, and the fixed-field version 1 before it), so a
-class can share one recorded drive and replay it through the estimators.
+class can share one recorded drive and replay it through the estimators. Camera images
+are not kept (a 640 x 480 image ten times a second is 300 MB in two minutes): a run
+that needs its images keeps the ones it needs itself.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from abcwc.types import (
     IR_FRAMES,
     LIDAR_FRAME,
     SONAR_FRAME,
+    CameraImage,
     LaserScan,
     PotCommand,
     SensorFrame,
@@ -260,7 +263,8 @@ class LogRecorder:
         ))
         row = len(self._rows) - 1
         for frame_id, reading in frame.readings.items():
-            if frame_id == SONAR_FRAME or frame_id in IR_FRAMES:
+            if frame_id == SONAR_FRAME or frame_id in IR_FRAMES or isinstance(
+                    reading, CameraImage):
                 continue
             if isinstance(reading, LaserScan):
                 seen = self._scans.setdefault(frame_id, [])

@@ -108,6 +108,21 @@ class LaserScan:
         return self.angle_min + self.angle_increment * np.arange(len(self.ranges))
 
 
+@dataclass(frozen=True)
+class CameraImage:
+    """An image and its camera (sensor_msgs/Image with CameraInfo's K): ``pixels``
+    (h, w) grey or (h, w, 3) RGB, uint8, taken at ``stamp`` s by a pinhole camera of
+    focal lengths ``fx``, ``fy`` and principal point ``cx``, ``cy`` (px), level, in the
+    optical frame of REP 103 (x right, y down, z ahead)."""
+
+    pixels: np.ndarray
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    stamp: float = 0.0
+
+
 SONAR_FRAME = "sonar_link"
 """Frame id of the MaxSonar MB1013 under the tray: one range (m) per reading."""
 IR_FRAMES = tuple(f"ir_{k}_link" for k in range(6))
@@ -116,6 +131,8 @@ DEPTH_SCAN_FRAME = "depth_scan_link"
 """Frame id of the Kinect's fake laser scan (depthimage_to_laserscan): a LaserScan."""
 LIDAR_FRAME = "lidar_link"
 """Frame id of the 360-degree 2D lidar: a LaserScan."""
+CAMERA_FRAME = "camera_link"
+"""Frame id of the Kinect's colour camera: a CameraImage."""
 
 _UNSET = object()  # "not given" for SensorFrame's keyword arguments (None means "no scan")
 
@@ -136,7 +153,8 @@ class SensorFrame:
     (as a ``header.frame_id``): :data:`SONAR_FRAME` and the six :data:`IR_FRAMES` map to
     a range (float, m; REP 117: ``inf`` nothing in range, ``-inf`` too close, NaN no
     reading), :data:`DEPTH_SCAN_FRAME` and :data:`LIDAR_FRAME` to a :class:`LaserScan`
-    (absent when the sensor is off). ``sonar``, ``ir``, ``lidar`` and ``depth_scan`` read
+    and :data:`CAMERA_FRAME` to a :class:`CameraImage` (absent when the sensor is off).
+    ``sonar``, ``ir``, ``lidar`` and ``depth_scan`` read
     (and set) the same entries, and the constructor takes them by those names too.
     """
 

@@ -118,14 +118,14 @@ def test_people_are_judged_by_where_the_chair_can_still_stop():
     lp, period = planner.local, 1.0 / planner.frequency
     person = np.array([[2.0, 0.0, 0.0, 0.0, 0.25]])
     samples = np.array([[0.0, 0.0], [0.3, 0.0], [0.6, 0.0]])
-    gaps = planner._people_gap((0.0, 0.0, 0.0), samples, person, horizon=4.0, dt=0.001)
+    gaps = planner.people_gap((0.0, 0.0, 0.0), samples, person, horizon=4.0, dt=0.001)
     circles, _ = covering_circles(FOOTPRINT)
     front = circles[:, 0].max()  # the foremost covering circle, on the chair's axis
     for (v, _), gap in zip(samples, gaps):
         stop = v * (period + delay) + v**2 / (2 * lp.acc_lim_x)
         assert gap == pytest.approx(2.0 - stop - front - 0.25 - planner._radius, abs=2e-3)
     # a longer braking delay leaves less room: the same sample is judged nearer
-    quick = DwaPlanner(FOOTPRINT)._people_gap((0.0, 0.0, 0.0), samples, person, 4.0, 0.001)
+    quick = DwaPlanner(FOOTPRINT).people_gap((0.0, 0.0, 0.0), samples, person, 4.0, 0.001)
     assert quick[2] - gaps[2] == pytest.approx(0.6 * delay, abs=2e-3)
 
 

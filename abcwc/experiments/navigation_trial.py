@@ -167,7 +167,7 @@ def random_goals(navigator: Navigator, count: int, seed: int, start: Pose2D,
     return goals
 
 
-def _gap_to_people(outline: np.ndarray, circles: np.ndarray) -> float:
+def gap_to_people(outline: np.ndarray, circles: np.ndarray) -> float:
     """Smallest distance (m) from a closed polygon (N, 2) to the edge of discs (M, 3)."""
     if not len(circles):
         return math.inf
@@ -256,7 +256,7 @@ def drive_to_goal(chair: SimBase, navigator: Navigator, goal: Pose2D | str,
         if footprint_cost(navigator.static_map, navigator.footprint, pose) == LETHAL:
             lethal += 1
         if chair.walkers:
-            closest = min(closest, _gap_to_people(transform_points(pose, outline),
+            closest = min(closest, gap_to_people(transform_points(pose, outline),
                                                   circles_of(chair.walkers)))
         estimate = navigator.localizer.pose
         worst = max(worst, math.hypot(estimate.x - pose.x, estimate.y - pose.y))
@@ -276,4 +276,5 @@ def drive_to_goal(chair: SimBase, navigator: Navigator, goal: Pose2D | str,
         np.array(estimates).reshape(-1, 3), np.array(people))
 
 
-__all__ = ["GoalOutcome", "Status", "TrialResult", "drive_to_goal", "random_goals", "run_trial"]
+__all__ = ["GoalOutcome", "Status", "TrialResult", "drive_to_goal", "gap_to_people",
+           "random_goals", "run_trial"]

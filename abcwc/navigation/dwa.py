@@ -108,6 +108,21 @@ def roll_out(pose: PoseLike, samples: np.ndarray, sim_time: float, steps: int) -
     return np.stack([x, y, theta], axis=-1)
 
 
+@dataclass(frozen=True)
+class FootprintCheck:
+    """Roll-outs and their collision check: ``poses`` (S, T + 1, 3), the covering
+    circles' costmap cells (``rows``, ``cols``: S x (T + 1) x circles), the
+    ``clearance`` map (m to the nearest lethal or unknown cell), the clearance each
+    circle ``needed`` (m) and which samples are ``valid`` (S,)."""
+
+    poses: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    clearance: np.ndarray
+    needed: float
+    valid: np.ndarray
+
+
 class DwaPlanner:
     """base_local_planner's DWA with A.17's parameters by default (``params``), for a
     chair of ``footprint`` grown by ``padding`` m (costmap_2d's ``footprint_padding``:
@@ -168,32 +183,11 @@ class DwaPlanner:
             raise ValueError("path must be a non-empty (K, 2) array of finite map points (m)")
         lp = self.local
         samples = self.window(velocity)
-        reach = np.abs(samples).max(axis=0) * lp.sim_time
-        steps = max(1, math.ceil(max(reach[0] / lp.sim_granularity,
-                                     reach[1] / lp.angular_sim_granularity)))
-        poses = roll_out(pose, samples, lp.sim_time, steps)
-
-        # the footprint as covering circles at every pose: clear if every circle's centre
-        # is farther than its radius from the nearest lethal or unknown cell
-        c, s = np.cos(poses[..., 2:]), np.sin(poses[..., 2:])
-        cx = poses[..., :1] + c * self._circles[:, 0] - s * self._circles[:, 1]
-        cy = poses[..., 1:2] + s * self._circles[:, 0] + c * self._circles[:, 1]
-        rows, cols = costmap.xy_to_cell(cx, cy)
-        on_map = costmap.contains(rows, cols).reshape(len(samples), -1).all(axis=1)
-        rows = np.clip(rows, 0, costmap.height - 1)
-        cols = np.clip(cols, 0, costmap.width - 1)
-        clearance = ndimage.distance_transform_edt(costmap.cost < LETHAL) * costmap.resolution
-        # a cell's distance is centre to centre: half a cell's diagonal is the slack
-        slack = costmap.resolution / math.sqrt(2)
-        needed = self._radius + slack
-        here = float(clearance[rows[0, 0], cols[0, 0]].min())  # the chair's circles now
-        if here <= needed:  # already closer than allowed: only ways that get away count
-            along = clearance[rows, cols].min(axis=2).reshape(len(samples), -1)
-            clear = (along >= here) & (along[:, -1:] >= here + costmap.resolution / 2)
-        else:
-            clear = (clearance[rows, cols] > needed).reshape(len(samples), -1)
+        check = self.check(costmap, pose, samples)
+        poses, rows, cols, clearance, needed = (check.poses, check.rows, check.cols,
+                                                check.clearance, check.needed)
         worst = costmap.cost[rows, cols].reshape(len(samples), -1).max(axis=1)
-        valid = on_map & clear.all(axis=1)
+        valid = check.valid.copy()
 
         path_cells, goal_cell = self._path_cells(costmap, path)
         ends = poses[:, -1]
@@ -215,7 +209,7 @@ class DwaPlanner:
         valid &= inside
         evading = False
         if people is not None and len(people):
-            gap = self._people_gap(pose, samples, np.asarray(people, float), people_horizon)
+            gap = self.people_gap(pose, samples, np.asarray(people, float), people_horizon)
             clear_of_people = gap > people_margin
             if valid.any() and not (valid & clear_of_people).any():
                 # the way that keeps farthest from both: a chair that flees a person
@@ -241,7 +235,37 @@ class DwaPlanner:
         return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])), samples,
                          poses, valid, cost, best, evading, terms)
 
-    def _people_gap(self, pose: PoseLike, samples: np.ndarray, people: np.ndarray,
+    def check(self, costmap: Costmap, pose: PoseLike, samples: np.ndarray) -> FootprintCheck:
+        """Roll each ``(v, w)`` of ``samples`` (S, 2) out from ``pose`` for ``sim_time``
+        and check the footprint's covering circles along it against ``costmap``'s
+        lethal and unknown cells (module notes, step 3)."""
+        lp = self.local
+        reach = np.abs(samples).max(axis=0) * lp.sim_time
+        steps = max(1, math.ceil(max(reach[0] / lp.sim_granularity,
+                                     reach[1] / lp.angular_sim_granularity)))
+        poses = roll_out(pose, samples, lp.sim_time, steps)
+        # the footprint as covering circles at every pose: clear if every circle's centre
+        # is farther than its radius from the nearest lethal or unknown cell
+        c, s = np.cos(poses[..., 2:]), np.sin(poses[..., 2:])
+        cx = poses[..., :1] + c * self._circles[:, 0] - s * self._circles[:, 1]
+        cy = poses[..., 1:2] + s * self._circles[:, 0] + c * self._circles[:, 1]
+        rows, cols = costmap.xy_to_cell(cx, cy)
+        on_map = costmap.contains(rows, cols).reshape(len(samples), -1).all(axis=1)
+        rows = np.clip(rows, 0, costmap.height - 1)
+        cols = np.clip(cols, 0, costmap.width - 1)
+        clearance = ndimage.distance_transform_edt(costmap.cost < LETHAL) * costmap.resolution
+        # a cell's distance is centre to centre: half a cell's diagonal is the slack
+        slack = costmap.resolution / math.sqrt(2)
+        needed = self._radius + slack
+        here = float(clearance[rows[0, 0], cols[0, 0]].min())  # the chair's circles now
+        if here <= needed:  # already closer than allowed: only ways that get away count
+            along = clearance[rows, cols].min(axis=2).reshape(len(samples), -1)
+            clear = (along >= here) & (along[:, -1:] >= here + costmap.resolution / 2)
+        else:
+            clear = (clearance[rows, cols] > needed).reshape(len(samples), -1)
+        return FootprintCheck(poses, rows, cols, clearance, needed, on_map & clear.all(axis=1))
+
+    def people_gap(self, pose: PoseLike, samples: np.ndarray, people: np.ndarray,
                     horizon: float, dt: float = 0.05) -> np.ndarray:
         """(S,) the smallest gap (m) between the chair's covering circles and the people's
         discs (moved on at their velocities) if the chair holds each sample for one

@@ -57,18 +57,26 @@ class PersonTrack:
 class PeopleTracker:
     """Track moving objects the static map does not explain (module notes).
 
-    ``walls`` is a (height, width) bool array of the static map's wall cells on ``grid``.
+    ``walls`` is a (height, width) bool array of the static map's wall cells on ``grid``;
+    without a map (``walls`` and ``grid`` None) every return is unexplained, and only
+    ``max_extent`` tells a person from a wall.
     """
 
-    def __init__(self, walls: np.ndarray, grid: GridGeometry, *, unexplained: float = 0.2,
+    def __init__(self, walls: np.ndarray | None, grid: GridGeometry | None, *,
+                 unexplained: float = 0.2,
                  cluster_gap: float = 0.3, min_points: int = 3, max_extent: float = 1.0,
                  person_radius: float = 0.25, gate: float = 0.6, alpha: float = 0.5,
                  beta: float = 0.2, max_age: float = 1.0, confirm: int = 3):
-        walls = np.asarray(walls, dtype=bool)
-        if walls.shape != grid.shape:
-            raise ValueError(f"walls {walls.shape} must lie on the grid's {grid.shape} cells")
         self.grid = grid
-        self.wall_distance = ndimage.distance_transform_edt(~walls) * grid.resolution
+        self.wall_distance: np.ndarray | None = None
+        if walls is not None and grid is not None:
+            walls = np.asarray(walls, dtype=bool)
+            if walls.shape != grid.shape:
+                raise ValueError(f"walls {walls.shape} must lie on the grid's {grid.shape} "
+                                 "cells")
+            self.wall_distance = ndimage.distance_transform_edt(~walls) * grid.resolution
+        elif (walls is None) != (grid is None):
+            raise ValueError("give both walls and grid, or neither (no map)")
         self.unexplained, self.cluster_gap = float(unexplained), float(cluster_gap)
         self.min_points, self.max_extent = int(min_points), float(max_extent)
         self.person_radius, self.gate = float(person_radius), float(gate)
@@ -81,11 +89,12 @@ class PeopleTracker:
     def detect(self, scan: LaserScan, sensor_pose: PoseLike) -> np.ndarray:
         """(K, 2) map-frame centres of the person candidates in one scan."""
         points = transform_points(sensor_pose, scan_points(scan))
-        rows, cols = self.grid.world_to_cell(points)
-        on_map = self.grid.contains(rows, cols)
-        distance = np.full(len(points), np.inf)
-        distance[on_map] = self.wall_distance[rows[on_map], cols[on_map]]
-        points = points[distance > self.unexplained]
+        if self.grid is not None and self.wall_distance is not None:
+            rows, cols = self.grid.world_to_cell(points)
+            on_map = self.grid.contains(rows, cols)
+            distance = np.full(len(points), np.inf)
+            distance[on_map] = self.wall_distance[rows[on_map], cols[on_map]]
+            points = points[distance > self.unexplained]
         if len(points) < self.min_points:
             return np.zeros((0, 2))
         labels = (fcluster(linkage(points, method="single"), self.cluster_gap,

@@ -23,6 +23,8 @@ from abcwc.base import BodyMixin
 from abcwc.control.interface_board import InterfaceBoard
 from abcwc.geometry import wrap_angle
 from abcwc.params import ChairParams, default_params
+from abcwc.perception.camera import PinholeCamera
+from abcwc.sim.colour_camera import render_colour
 from abcwc.sim.motor import ChairErrors, MotorController, resolve_errors
 from abcwc.sim.people import (
     LOOK_AHEAD,
@@ -34,7 +36,19 @@ from abcwc.sim.people import (
 from abcwc.sim.raycast import visible_segments
 from abcwc.sim.sensors import Encoders, Gyro, IrRing, ScanSensor, Sonar
 from abcwc.sim.world import World, load_world
-from abcwc.types import LaserScan, Pose2D, PotCommand, SensorFrame, StatusFlags, Twist
+from abcwc.types import (
+    CAMERA_FRAME,
+    CameraImage,
+    LaserScan,
+    Pose2D,
+    PotCommand,
+    SensorFrame,
+    StatusFlags,
+    Twist,
+)
+
+CAMERA_MODES = ("rgb", "gray")
+"""What ``SimBase(camera=...)`` can render: colour, or grey at a third of the cost."""
 
 CHAIR_COLLISION_TYPE = 1
 WALL_COLLISION_TYPE = 2
@@ -63,6 +77,7 @@ class SimBase(BodyMixin):
         depth_scan: bool = False,
         start: Pose2D | str | None = None,
         people: bool = True,
+        camera: str | None = None,
     ):
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
@@ -82,6 +97,15 @@ class SimBase(BodyMixin):
         self.depth_camera = (
             ScanSensor(p.depth_scan, rngs[5], depth_noise=True) if depth_scan else None
         )
+        if camera is not None and camera not in CAMERA_MODES:
+            raise ValueError(f"camera must be None or one of {', '.join(CAMERA_MODES)}, "
+                             f"got {camera!r}")
+        self.camera_mode = camera
+        # the Kinect's colour camera beside its depth camera: 640 x 480, 57 x 43 degrees
+        self.camera = PinholeCamera.from_fov(640, 480, p.depth_scan.fov_deg,
+                                             p.depth_scan.vertical_fov_deg)
+        self._camera_rng = rngs[6]
+        self._image: CameraImage | None = None
         self._build_space(self._start_pose(start), people)
         # what each sensor can see of the walls and objects from its height (static)
         w = self.world
@@ -284,6 +308,20 @@ class SimBase(BodyMixin):
         if self.depth_camera is not None and (force or phase == 3):
             self._last_scan["depth_scan"] = self.depth_camera.read(
                 pose, seen["depth_scan"], circles, self.t)
+        if self.camera_mode is not None and (force or phase == 4):
+            self._image = self.render_camera()
+
+    def render_camera(self, rng: bool = True) -> CameraImage:
+        """What the colour camera sees now (with the frame's lighting, blur and noise
+        drawn from the seeded generator; the ideal image with ``rng`` False)."""
+        p, w, camera = self.params, self.world, self.camera
+        targets = tuple(t for t in (walker.tag_target() for walker in self.walkers)
+                        if t is not None)
+        pixels = render_colour(camera, self.pose, p.depth_scan.mount, p.depth_scan.height,
+                               w.walls, w.bands, circles_of(self.walkers), targets,
+                               self._camera_rng if rng else None,
+                               gray=self.camera_mode == "gray")
+        return CameraImage(pixels, camera.fx, camera.fy, camera.cx, camera.cy, self.t)
 
     def _make_frame(self, gyro_z: float) -> SensorFrame:
         left, right = self.encoders.counts
@@ -294,6 +332,7 @@ class SimBase(BodyMixin):
             pot_fb=self._pots.fb, pot_lr=self._pots.lr, flags=self._flags,
             pose=self.pose, lidar=self._last_scan["lidar"],
             depth_scan=self._last_scan["depth_scan"], collisions=self.collisions,
+            readings={CAMERA_FRAME: self._image} if self._image is not None else None,
         )
 
     # ----------------------------------------------------------------- runs

@@ -21,9 +21,13 @@ import math
 import numpy as np
 import pymunk
 
+from abcwc.sim.colour_camera import PlanarTarget
 from abcwc.sim.world import PersonSpec
 
 PERSON_COLLISION_TYPE = 3
+TAG_HEIGHT = 0.9
+"""m: the centre of the card a person wears on their back (at the height of the
+chair's camera and a little above, so that it stays in view from 0.6 m)."""
 BUMP_PAUSE = 1.0
 """s a walker stands still after touching the chair."""
 LOOK_AHEAD = 0.4
@@ -55,6 +59,8 @@ class Walker:
         self._paused = 0.0  # s of standing still left after a bump
         self._waited = 0.0  # s stood so far for a blocked way
         self._touching = False  # in contact with the chair at the last step
+        self._facing = self.heading()  # the way the walker last faced
+        self._card = spec.tag.image() if spec.tag is not None else None
 
     def heading(self) -> tuple[float, float]:
         """Unit vector towards the waypoint the walker is making for ((0, 0) on it)."""
@@ -124,6 +130,21 @@ class Walker:
             - math.atan2(reached[1] - came_from[1], reached[0] - came_from[0]), math.tau))
         if turn > math.pi / 2:
             self._paused = max(self._paused, TURN_TIME * turn / math.pi)
+
+    def tag_target(self) -> PlanarTarget | None:
+        """The card on the walker's back (None without one): facing backwards, just
+        clear of the body's disc, centred at ``TAG_HEIGHT``."""
+        if self._card is None or self.spec.tag is None:
+            return None
+        hx, hy = self.heading()
+        if hx or hy:
+            self._facing = (hx, hy)
+        fx, fy = self._facing
+        x, y = self.body.position
+        back = self.spec.radius + 0.01
+        return PlanarTarget(f"{self.spec.name}'s tag", self._card, self.spec.tag.width,
+                            (x - back * fx, y - back * fy, TAG_HEIGHT),
+                            math.atan2(-fy, -fx))
 
     @property
     def circle(self) -> tuple[float, float, float]:

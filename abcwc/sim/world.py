@@ -8,7 +8,8 @@ A world file (``data/worlds/<name>.json``) holds::
       "walls": [[[x, y], [x, y], ...], ...],      # polylines, metres
       "places": {"start": [x, y, theta], ...},     # theta in rad; "start" is required
       "people": [{"name": "ana", "path": [[x, y], ...], "speed": 0.8,
-                  "radius": 0.25, "loop": true}],  # optional
+                  "radius": 0.25, "loop": true,
+                  "tag": {"text": "ana", "marker_id": 7, "side": 0.2}}],  # optional
       "objects": [{"name": "table top", "outline": [[x, y], ...],
                    "z": [0.70, 0.75]}]             # optional
     }
@@ -18,7 +19,9 @@ Walls stand from the floor to ``WALL_HEIGHT``. An object is an outline standing 
 two heights ``z`` (m): a table is a top at 0.70-0.75 m over four legs from the floor
 (:func:`table`). A sensor sees an object only where its view at that height reaches it
 (a planar lidar at its mount height, a depth camera's band of rows); the chair collides
-with every wall and object (each is below the seated person's head).
+with every wall and object (each is below the seated person's head). A person may wear
+a ``tag`` on their back, a :class:`~abcwc.perception.tags.FollowCard` (an ArUco marker
+and a QR code of ``text``, each ``side`` m across) that the chair's camera sees.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from abcwc.paths import data_dir, read_document
+from abcwc.perception.tags import FollowCard
 from abcwc.types import Pose2D
 
 WALL_HEIGHT = 2.5
@@ -50,6 +54,7 @@ class PersonSpec:
     speed: float = 0.8
     radius: float = 0.25
     loop: bool = True
+    tag: FollowCard | None = None  # worn on the back
 
 
 @dataclass(frozen=True)
@@ -169,6 +174,7 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
                 speed=float(speed),
                 radius=float(radius),
                 loop=bool(person.get("loop", True)),
+                tag=_tag(person.get("tag"), f"{label}: people[{i}].tag"),
             )
         )
     return World(
@@ -180,6 +186,19 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
         source=source,
         bands=np.array(bands, dtype=float),
     )
+
+
+def _tag(raw: object, where: str) -> FollowCard | None:
+    """A person's ``tag`` entry as a FollowCard (None when there is none)."""
+    if raw is None:
+        return None
+    if not isinstance(raw, dict) or not {"text", "marker_id"} <= raw.keys():
+        raise WorldError(f"{where} must be an object with text, marker_id and optionally "
+                         "side (m)")
+    try:
+        return FollowCard(str(raw["text"]), raw["marker_id"], float(raw.get("side", 0.2)))
+    except (TypeError, ValueError) as error:
+        raise WorldError(f"{where}: {error}") from None
 
 
 def _polyline_segments(line: object, where: str) -> list[tuple[float, float, float, float]]:

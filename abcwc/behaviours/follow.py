@@ -1,0 +1,447 @@
+"""Follow a person who wears a tag: keep about a metre behind them, along their way.
+
+The thesis's follower (4.3.3, appendix A.13) drove on the *change* of the tag's
+position between two frames, ``v = 1000 (z_prev - z)``, ``w = 1000 (x_prev - x)``: a
+person standing still gives no command at all, however far away, and one frame's noise
+of a millimetre is a command of 1 m/s. :class:`ThesisFollower` is that law, kept to be
+measured. :class:`TagFollower` is the one to use:
+
+**Seeing.** Each new camera image (10 Hz), the ArUco marker of the person's
+:class:`~abcwc.perception.tags.FollowCard` is found and its pose solved
+(:func:`~abcwc.perception.tags.square_pose`); a marker under ``min_marker_px`` across
+gives too poor a range to use (within 2 % from 20 px across, 6 % at 15 px). Its
+centre goes from the optical frame to base_link through the camera's mount, and to the
+odom frame through the chair's own odometry (wheels and gyro: a pose estimator with
+``update_frame``).
+
+**Tracking.** The tag says *who*; the lidar says *where*, ten times a second, also when
+the card on the person's back has turned too far from the camera to be read (round a
+corner) or is out of the camera's 57 degrees. The person's centre (the tag's point
+pushed ``person_radius`` m on along the line of sight; or the mean of the lidar's
+returns within ``gate`` m of the prediction, pushed ``2 r / pi`` away from the sensor,
+where a half disc's arc has its centroid) feeds an alpha-beta filter of position and
+velocity in the odom frame, as :class:`~abcwc.navigation.people.PeopleTracker` tracks
+people. Lidar returns are taken only while the tag was read within ``trust_lidar_for``
+s (it is the tag that names the person), and only as a compact blob (at most
+``max_extent`` m across: not a wall).
+
+**Range and bearing.** With ``range`` and ``alpha`` the person's distance and bearing
+from the chair's camera::
+
+    v = min(v_person + k_gap gap, v_person + v_stop(gap), max_speed) * max(cos alpha, 0)
+    w = clip(k_turn alpha, -max_turn_rate, max_turn_rate)
+
+``v_person`` (how fast the person draws away along the line of sight, m/s, from the
+track's velocity; never negative) is the feed-forward: without it a proportional law
+keeps ``v_person / k_gap`` m more than ``distance`` behind a walking person (0.5 m at
+0.7 m/s with ``k_gap`` 1.5); with their whole speed instead, a person turning across
+the chair's way would be run up to. The turn is proportional, not A.13's derivative nor a
+fixed rate, so it eases off as the person comes ahead and does not swing past:
+with ``gap = range - distance`` and ``v_stop`` the speed from which the chair stops in
+``gap`` at ``braking`` after its reaction time ``T`` (the safety filter's: sensing,
+command delay and the wheels' lag), ``v T + v^2 / (2 braking) = gap``. Without that cap
+a chair closing on a standing person from 2.5 m overshoots to 0.5 m.
+``k_turn`` 1.5 1/s with the camera's 0.1 s is well inside the loop's margin (a pure
+delay ``T`` allows ``k < pi / (2 T)``, 15.7 1/s).
+
+**Lost.** With neither the tag nor the lidar on the person for ``lost_after`` s the
+chair drives on towards where the person would be by now (the track moved on at its
+last velocity, for at most ``predict_for`` s); once there, or after ``predict_for`` s,
+it turns on the spot towards the side it was last on at ``search_turn_rate`` for up to
+one full turn, then fails, "lost".
+
+**Obstacles.** Every wanted command is checked against a local costmap built from the
+newest lidar scan (``local_size`` m square round the chair, in base_link): the DWA
+planner's footprint check over the window of commands reachable in one cycle. If the
+wanted command's arc is not clear, the clear one nearest to it is sent (speeds scaled
+by their limits); with none, the chair stops. The person is in the scan too, so the
+chair never drives into them. Other people are tracked in the scan too (a
+:class:`~abcwc.navigation.people.PeopleTracker` without a map: compact blobs, their
+velocities from an alpha-beta filter), and a command must leave the chair able to stop
+clear of where each will be within ``people_horizon`` s (the DWA planner's
+:meth:`~abcwc.navigation.dwa.DwaPlanner.people_gap`): a passer-by crossing in front is
+waited for, not met. Everything it sends passes through the
+:class:`~abcwc.control.safety.SafetyFilter`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from abcwc.behaviours.base import BehaviourBase
+from abcwc.behaviours.landmark import PoseEstimator
+from abcwc.control.safety import SafetyFilter
+from abcwc.geometry import compose, transform_points, wrap_angle
+from abcwc.mapping.icp import scan_points
+from abcwc.navigation.costmap import FREE_SPACE, Costmap, chair_footprint
+from abcwc.navigation.dwa import DwaPlanner
+from abcwc.navigation.people import PeopleTracker
+from abcwc.params import ChairParams, default_params, load_navigation_params
+from abcwc.perception.camera import PinholeCamera
+from abcwc.perception.tags import (
+    MIN_POSE_SIDE_PX,
+    FollowCard,
+    detect_aruco_markers,
+    square_pose,
+)
+from abcwc.types import (
+    CAMERA_FRAME,
+    LIDAR_FRAME,
+    CameraImage,
+    LaserScan,
+    Pose2D,
+    SensorFrame,
+    Twist,
+)
+
+
+@dataclass(frozen=True)
+class FollowSettings:
+    """The follower's gains and limits (SI units; module notes for the laws)."""
+
+    distance: float = 1.0  # m kept behind the person, along their way
+    k_gap: float = 1.5  # 1/s
+    k_turn: float = 1.5  # 1/s
+    max_speed: float = 1.0  # m/s: the safety filter's cap for a seated person
+    max_turn_rate: float = 0.8  # rad/s
+    braking: float = 0.4  # m/s^2 planned (the safety filter's ramp allows 0.8, with lag)
+    lost_after: float = 0.5  # s without a sighting
+    predict_for: float = 2.0  # s the person's last velocity is trusted
+    search_turn_rate: float = 0.5  # rad/s
+    min_marker_px: float = MIN_POSE_SIDE_PX  # px across: narrower markers range poorly
+    person_radius: float = 0.25  # m from a person's back to their centre
+    gate: float = 0.5  # m round the predicted centre where lidar returns are the person's
+    max_extent: float = 0.7  # m: a blob wider than this is not a person
+    alpha: float = 0.5  # the track's position gain
+    beta: float = 0.2  # the track's velocity gain
+    trust_lidar_for: float = 10.0  # s after the tag was last read
+    people_horizon: float = 2.0  # s others' paths are predicted for
+    people_margin: float = 0.1  # m kept from others' predicted discs
+    local_size: float = 5.0  # m, the local costmap's side
+    padding: float = 0.05  # m round the footprint in the obstacle check
+
+
+@dataclass(frozen=True)
+class Sighting:
+    """The person seen at ``t`` s: ``position`` (x, y), the middle of their card in the
+    odom frame, and the marker's ``range`` (m) and ``bearing`` (rad) from the camera."""
+
+    t: float
+    position: tuple[float, float]
+    range: float
+    bearing: float
+
+
+class TagFollower(BehaviourBase):
+    """Follow whoever wears ``card`` (module notes), with the chair's ``estimator`` for
+    the odom frame. ``sightings`` keeps every sighting and ``log`` one row per decision
+    (t, range or NaN, bearing or NaN, v, w, state) for plots."""
+
+    def __init__(self, card: FollowCard, estimator: PoseEstimator,
+                 params: ChairParams | None = None, settings: FollowSettings | None = None):
+        super().__init__(rate_hz=10.0)
+        self.card = card
+        self.estimator = estimator
+        self.params = p = params or default_params()
+        self.settings = s = settings or FollowSettings()
+        for name in ("distance", "k_gap", "k_turn", "max_speed", "max_turn_rate",
+                     "lost_after", "predict_for", "search_turn_rate", "local_size",
+                     "braking"):
+            value = getattr(s, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+        self.safety = SafetyFilter(p)
+        nav = load_navigation_params()
+        local = replace(nav.local_planner, max_vel_x=s.max_speed, min_vel_x=0.0,
+                        max_vel_theta=s.max_turn_rate, vx_samples=8, vtheta_samples=21)
+        self.planner = DwaPlanner(chair_footprint(p), nav, local, padding=s.padding,
+                                  braking_delay=self.safety.reaction_time)
+        self.reset()
+
+    def reset(self) -> None:
+        super().reset()
+        self.safety.reset()
+        self.pose = Pose2D()
+        self.sightings: list[Sighting] = []
+        self.log: list[tuple[float, float, float, float, float, str]] = []
+        self.state = "searching"
+        self._last_image = -math.inf
+        self._search_turned, self._searching = 0.0, False
+        self.track: np.ndarray | None = None  # the person's centre (odom, m)
+        self.velocity = np.zeros(2)  # m/s
+        self._t = self._updated = self._tag_read = -math.inf
+        self._last_scan = -math.inf
+        self._side = 1.0
+        self.others = PeopleTracker(None, None, max_extent=self.settings.max_extent,
+                                    person_radius=self.settings.person_radius)
+        self._velocity = (0.0, 0.0)
+        self._decided_at = 0.0
+
+    # ---------------------------------------------------------------- every frame
+    def observe(self, frame: SensorFrame) -> None:
+        self.pose = self.estimator.update_frame(frame)
+
+    def __call__(self, frame: SensorFrame) -> Twist:
+        wanted = super().__call__(frame)
+        assert isinstance(wanted, Twist)
+        command = self.safety.apply(frame, wanted, self._decided_at)
+        self._velocity = (command.v, command.w)
+        return command
+
+    # ---------------------------------------------------------------- 10 Hz
+    def update(self, frame: SensorFrame) -> Twist:
+        self._decided_at = frame.t
+        s = self.settings
+        self._predict(frame.t)
+        image = frame.readings.get(CAMERA_FRAME)
+        seen = None
+        if isinstance(image, CameraImage) and image.stamp > self._last_image:
+            self._last_image = image.stamp
+            seen = self._look(image)
+        measured = []
+        if seen is not None:
+            self.sightings.append(seen)
+            centre = self._centre_behind(seen.position)
+            if self.track is None or np.hypot(*(centre - self.track)) > 1.0:
+                self.track, self.velocity = centre, np.zeros(2)  # (re)start on the tag
+            measured.append(centre)
+            self._tag_read = frame.t
+        scan = frame.readings.get(LIDAR_FRAME)
+        if isinstance(scan, LaserScan) and scan.stamp > self._last_scan:
+            self._last_scan = scan.stamp
+            self.others.update(scan, compose(self.pose, Pose2D(*self.params.lidar.mount)),
+                               scan.stamp)
+            if self.track is not None and frame.t - self._tag_read <= s.trust_lidar_for:
+                centre = self._lidar_centre(scan)
+                if centre is not None:
+                    measured.append(centre)
+        if measured:  # one update a decision: two sources apart would fake a velocity
+            self._measured(frame.t, np.mean(measured, axis=0))
+        if self.track is None:
+            wanted = self._search(frame, 1.0)
+        elif frame.t - self._updated <= s.lost_after:
+            self.state = "following"
+            self._search_turned, self._searching = 0.0, False
+            wanted = self._towards(self.track, self.velocity)
+        elif not self._searching and frame.t - self._updated <= s.lost_after + s.predict_for:
+            self.state = "going where the person was heading"
+            wanted = self._towards(self.track, self.velocity)
+            self._searching = wanted.v <= 0.02 and abs(wanted.w) <= 0.05  # there: look
+        else:
+            self._searching = True
+            wanted = self._search(frame, self._side)
+        command = self._clear_of_obstacles(frame, wanted)
+        self.log.append((frame.t, seen.range if seen else math.nan,
+                         seen.bearing if seen else math.nan, command.v, command.w, self.state))
+        return command
+
+    def _look(self, image: CameraImage) -> Sighting | None:
+        """The person's marker in ``image``, as a sighting (None if not seen, or too
+        small to range)."""
+        markers = [m for m in detect_aruco_markers(image.pixels)
+                   if m.marker_id == self.card.marker_id]
+        if not markers or markers[0].side_px < self.settings.min_marker_px:
+            return None
+        h, w = image.pixels.shape[:2]
+        camera = PinholeCamera(w, h, image.fx, image.fy, image.cx, image.cy)
+        tag = square_pose(markers[0].corners, self.card.side, camera)
+        # the card's middle, beside the marker along the card's own x axis (its right)
+        middle = tag.position - self.card.marker_offset * tag.rotation[:, 0]
+        # optical (x right, z ahead) -> the camera's floor frame (x ahead, y left)
+        ahead, left = middle[2], -middle[0]
+        in_base = compose(Pose2D(*self.params.depth_scan.mount), Pose2D(ahead, left, 0.0))
+        in_odom = compose(self.pose, in_base)
+        return Sighting(image.stamp, (in_odom.x, in_odom.y), tag.range, tag.bearing)
+
+    def _camera(self) -> Pose2D:
+        return compose(self.pose, Pose2D(*self.params.depth_scan.mount))
+
+    def _centre_behind(self, point: tuple[float, float]) -> np.ndarray:
+        """A person's centre ``person_radius`` m beyond ``point`` (on their near side)
+        along the camera's line of sight."""
+        camera = self._camera()
+        away = np.array([point[0] - camera.x, point[1] - camera.y])
+        away /= max(float(np.hypot(*away)), 1e-9)
+        return np.asarray(point) + self.settings.person_radius * away
+
+    def _lidar_centre(self, scan: LaserScan) -> np.ndarray | None:
+        """The person's centre from the lidar returns near the track (module notes), or
+        None if there is no compact blob there."""
+        s = self.settings
+        sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
+        points = transform_points(sensor, scan_points(scan))
+        near = points[np.hypot(*(points - self.track).T) <= s.gate]
+        if len(near) < 3 or np.ptp(near, axis=0).max() > s.max_extent:
+            return None
+        mean = near.mean(axis=0)
+        away = mean - (sensor.x, sensor.y)
+        away /= max(float(np.hypot(*away)), 1e-9)
+        return mean + away * 2 * s.person_radius / math.pi
+
+    def _predict(self, now: float) -> None:
+        """Move the track on at its velocity (for at most ``predict_for`` s unseen)."""
+        s = self.settings
+        if self.track is not None and now - self._updated <= s.lost_after + s.predict_for:
+            self.track = self.track + self.velocity * (now - self._t)
+        self._t = now
+
+    def _measured(self, now: float, centre: np.ndarray) -> None:
+        """Alpha-beta update of the track with a measured ``centre`` (module notes)."""
+        s = self.settings
+        assert self.track is not None
+        residual = centre - self.track
+        self.track = self.track + s.alpha * residual
+        if math.isfinite(self._updated) and now > self._updated:
+            self.velocity = self.velocity + s.beta / (now - self._updated) * residual
+        self._updated = now
+        camera = self._camera()
+        self._side = 1.0 if wrap_angle(math.atan2(self.track[1] - camera.y,
+                                                  self.track[0] - camera.x)
+                                       - camera.theta) >= 0 else -1.0
+
+    def _towards(self, centre: np.ndarray, velocity: np.ndarray) -> Twist:
+        """The range-and-bearing law (module notes) for a person whose centre is at
+        ``centre`` (odom) moving at ``velocity``; the range is from the camera to their
+        near side."""
+        s = self.settings
+        camera = self._camera()
+        dx, dy = centre[0] - camera.x, centre[1] - camera.y
+        alpha = wrap_angle(math.atan2(dy, dx) - camera.theta)
+        distance = math.hypot(dx, dy)
+        receding = max(float(velocity[0] * dx + velocity[1] * dy) / max(distance, 1e-9), 0.0)
+        near_side = distance - s.person_radius
+        # no faster than can still stop in the gap left, after the chair's reaction time
+        # T: v T + v^2 / (2 b) = gap (plus what the person draws away meanwhile)
+        b, lag = s.braking, self.safety.reaction_time
+        gap = max(near_side - s.distance, 0.0)
+        stoppable = receding - b * lag + math.sqrt((b * lag) ** 2 + 2 * b * gap)
+        v = min(max(receding + s.k_gap * (near_side - s.distance), 0.0), stoppable,
+                s.max_speed) * max(math.cos(alpha), 0.0)
+        w = min(max(s.k_turn * alpha, -s.max_turn_rate), s.max_turn_rate)
+        return Twist(v, w)
+
+    def _search(self, frame: SensorFrame, side: float) -> Twist:
+        """Turn on the spot towards ``side`` (+1 left, -1 right); fail after a full
+        turn."""
+        s = self.settings
+        if self._search_turned >= 2 * math.pi:
+            self.fail(f"lost: no sight of the person for {frame.t - self._updated:.0f} s, "
+                      "and a full turn did not find them")
+            return Twist(0.0, 0.0)
+        self.state = "searching"
+        self._search_turned += s.search_turn_rate / self.rate_hz
+        return Twist(0.0, side * s.search_turn_rate)
+
+    def _clear_of_obstacles(self, frame: SensorFrame, wanted: Twist) -> Twist:
+        """``wanted`` if its arc is clear in the local costmap, else the nearest clear
+        command reachable in one cycle, else a stop (module notes)."""
+        scan = frame.readings.get(LIDAR_FRAME)
+        if not isinstance(scan, LaserScan):
+            return wanted
+        s = self.settings
+        people = self._people_in_base()
+        if self.track is not None and self._updated >= frame.t - s.lost_after:
+            # the person followed is a moving disc, not a wall: their returns leave the map
+            sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
+            ranges = np.array(scan.ranges, dtype=float)
+            finite = np.where(np.isfinite(ranges), ranges, 0.0)
+            ends = transform_points(sensor, np.column_stack([finite * np.cos(scan.angles),
+                                                             finite * np.sin(scan.angles)]))
+            theirs = np.isfinite(ranges) & (np.hypot(*(ends - self.track).T) <= s.gate)
+            scan = replace(scan, ranges=np.where(theirs, np.nan, ranges))
+        local = Costmap.rolling_window(Pose2D(), s.local_size, 0.05, default=FREE_SPACE)
+        local.add_scan(scan, self.params.lidar.mount, obstacle_range=s.local_size / 2,
+                       raytrace_range=s.local_size / 2)
+        samples = np.vstack([[wanted.v, wanted.w], self.planner.window(self._velocity)])
+        samples[:, 0] = np.clip(samples[:, 0], 0.0, s.max_speed)
+        valid = self.planner.check(local, Pose2D(), samples).valid
+        if len(people):
+            valid &= self.planner.people_gap(Pose2D(), samples, people,
+                                             s.people_horizon) > s.people_margin
+        if valid[0]:
+            return wanted
+        if not valid.any():
+            self.state = "blocked"
+            return Twist(0.0, 0.0)
+        distance = np.hypot((samples[:, 0] - wanted.v) / s.max_speed,
+                            (samples[:, 1] - wanted.w) / s.max_turn_rate)
+        best = int(np.argmin(np.where(valid, distance, np.inf)))
+        return Twist(float(samples[best, 0]), float(samples[best, 1]))
+
+
+    def _people_in_base(self) -> np.ndarray:
+        """(M, 5) the people round the chair as DWA's moving discs (x, y, vx, vy,
+        radius) in base_link: the one followed (from the track) and the others tracked
+        in the scan."""
+        s = self.settings
+        discs = self.others.moving_discs()
+        if self.track is not None and len(discs):
+            discs = discs[np.hypot(*(discs[:, :2] - self.track).T) > s.gate]
+        if self.track is not None and self._updated >= self._t - s.lost_after:
+            discs = np.vstack([discs, [*self.track, *self.velocity, s.person_radius]])
+        if not len(discs):
+            return discs
+        c, s_ = math.cos(self.pose.theta), math.sin(self.pose.theta)
+        to_base = np.array([[c, s_], [-s_, c]])
+        position = (discs[:, :2] - (self.pose.x, self.pose.y)) @ to_base.T
+        velocity = discs[:, 2:4] @ to_base.T
+        return np.column_stack([position, velocity, discs[:, 4]])
+
+
+class ThesisFollower(BehaviourBase):
+    """Appendix A.13's follower, to be measured against :class:`TagFollower`: at 10 Hz,
+    while the tag is seen, ``v = 1000 (z_prev - z)`` and ``w = 1000 (x_prev - x)`` from
+    the tag's position in the optical frame (m) in two successive images; a stop while
+    it is not. (A.13 subscribes to ViSP's tracker; here the same marker pose.) The
+    commands still pass through the safety filter: the chair is not let drive at
+    whatever the law asks."""
+
+    def __init__(self, card: FollowCard, params: ChairParams | None = None):
+        super().__init__(rate_hz=10.0)
+        self.card = card
+        self.params = params or default_params()
+        self.safety = SafetyFilter(self.params)
+        self.reset()
+
+    def reset(self) -> None:
+        super().reset()
+        self.safety.reset()
+        self._previous: np.ndarray | None = None
+        self._last_image = -math.inf
+        self._decided_at = 0.0
+        self.log: list[tuple[float, float, float, float, float, str]] = []
+
+    def __call__(self, frame: SensorFrame) -> Twist:
+        wanted = super().__call__(frame)
+        assert isinstance(wanted, Twist)
+        return self.safety.apply(frame, wanted, self._decided_at)
+
+    def update(self, frame: SensorFrame) -> Twist:
+        self._decided_at = frame.t
+        image = frame.readings.get(CAMERA_FRAME)
+        if not isinstance(image, CameraImage) or image.stamp <= self._last_image:
+            return self._last_command if isinstance(self._last_command, Twist) else Twist(0, 0)
+        self._last_image = image.stamp
+        markers = [m for m in detect_aruco_markers(image.pixels)
+                   if m.marker_id == self.card.marker_id]
+        if not markers:
+            self._previous = None
+            self.log.append((frame.t, math.nan, math.nan, 0.0, 0.0, "searching"))
+            return Twist(0.0, 0.0)
+        h, w = image.pixels.shape[:2]
+        camera = PinholeCamera(w, h, image.fx, image.fy, image.cx, image.cy)
+        tag = square_pose(markers[0].corners, self.card.side, camera)
+        previous, self._previous = self._previous, tag.position
+        if previous is None:
+            command = Twist(0.0, 0.0)
+        else:
+            command = Twist(1000.0 * (previous[2] - tag.position[2]),
+                            1000.0 * (previous[0] - tag.position[0]))
+        self.log.append((frame.t, tag.range, tag.bearing, command.v, command.w, "following"))
+        return command
+
+
+__all__ = ["FollowSettings", "Sighting", "TagFollower", "ThesisFollower"]

@@ -1,0 +1,135 @@
+"""The follower's trial: a person with a tag walks two minutes round the lab, the chair
+follows.
+
+Ana wears a :class:`~abcwc.perception.tags.FollowCard` on her back and walks a loop of
+the lab at 0.7 m/s, round both tables, with six turns of 90 degrees or more; Ben, who
+wears nothing, hurries (1.2 m/s) back and forth across her way, between her and the
+chair, three times in the two minutes, so the chair loses sight of her and must wait
+for him. The chair starts 1.2 m behind her with the lidar and the colour camera (grey)
+on. The simulator's ground truth only *judges* the follower:
+
+* ``distance``: from the camera to the card on Ana's back (m), every 0.1 s;
+* ``seen``: whether the follower read the tag in that decision;
+* ``collisions``: pymunk contacts of the chair with a wall or a person;
+* ``closest_person``: the smallest gap (m) between the chair's outline and a person.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from abcwc.behaviours.follow import FollowSettings, TagFollower, ThesisFollower
+from abcwc.estimation.gyro import GyroOdometry
+from abcwc.experiments.navigation_trial import gap_to_people
+from abcwc.geometry import transform_points
+from abcwc.paths import data_dir
+from abcwc.sim import SimBase
+from abcwc.sim.people import circles_of
+from abcwc.sim.sensors import sensor_pose
+from abcwc.sim.world import World, world_from_dict
+
+ANA_PATH = [[2.7, 1.4], [5.2, 1.1], [8.7, 1.0], [8.8, 3.6], [5.4, 3.9], [5.3, 6.8],
+            [2.0, 6.8], [1.6, 3.5]]
+"""m: Ana's loop of the lab (the chair starts at the lab's start, (1.5, 1.5))."""
+BEN_PATH = [[4.0, 0.4], [4.6, 3.0]]
+"""m: Ben's line across the lab's south side, walked back and forth."""
+
+
+def follow_world(passer_by: bool = True) -> World:
+    """The lab with Ana (tag: ArUco 7 and a QR code "ana") and, with ``passer_by``,
+    Ben."""
+    raw = json.loads((data_dir() / "worlds" / "lab.json").read_text())
+    raw["people"] = [{"name": "ana", "speed": 0.7, "loop": True, "path": ANA_PATH,
+                      "tag": {"text": "ana", "marker_id": 7, "side": 0.2}}]
+    if passer_by:
+        raw["people"].append({"name": "ben", "speed": 1.2, "loop": False, "path": BEN_PATH})
+    raw["description"] = "The lab, with Ana (who wears a tag) and Ben walking."
+    return world_from_dict(raw)
+
+
+@dataclass
+class FollowResult:
+    """One run of a follower (module notes); arrays at 10 Hz."""
+
+    t: np.ndarray
+    distance: np.ndarray  # m, camera to the card (truth)
+    seen: np.ndarray  # bool: the tag read in that decision
+    v: np.ndarray  # m/s sent
+    w: np.ndarray  # rad/s sent
+    states: list[str] = field(default_factory=list)
+    collisions: int = 0
+    closest_person: float = math.inf  # m
+    status: str = "running"
+    failure: str | None = None
+    track: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # chair, truth
+    people: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)))
+
+    def held(self, distance: float = 1.0, tolerance: float = 0.3) -> float:
+        """Fraction of the decisions with the tag read in which the chair was within
+        ``tolerance`` of ``distance``."""
+        inside = np.abs(self.distance - distance) <= tolerance
+        return float(inside[self.seen].mean()) if self.seen.any() else 0.0
+
+    def longest_blind(self) -> float:
+        """s: the longest stretch without reading the tag."""
+        stamps = np.concatenate([[self.t[0]], self.t[self.seen], [self.t[-1]]])
+        return float(np.diff(stamps).max())
+
+    def summary(self) -> str:
+        return "\n".join([
+            f"{self.t[-1] - self.t[0] + 0.1:.0f} s; tag read in {100 * self.seen.mean():.0f} % "
+            f"of the decisions; longest without it {self.longest_blind():.1f} s",
+            f"distance to the tag: median {np.median(self.distance):.2f} m, "
+            f"{100 * self.held():.1f} % of the readings within 1.0 +- 0.3 m",
+            f"collisions: {self.collisions}; closest to a person: {self.closest_person:.2f} m",
+            f"status: {self.status}" + (f" ({self.failure})" if self.failure else ""),
+        ])
+
+
+def run_follow_trial(seconds: float = 120.0, seed: int = 0, thesis: bool = False,
+                     passer_by: bool = True, settings: FollowSettings | None = None
+                     ) -> FollowResult:
+    """Run :class:`TagFollower` (or, with ``thesis``, A.13's :class:`ThesisFollower`)
+    for ``seconds`` in :func:`follow_world` (module notes)."""
+    chair = SimBase(follow_world(passer_by), seed=seed, lidar=True, camera="gray")
+    ana = chair.walkers[0]
+    card = ana.spec.tag
+    assert card is not None
+    follower: TagFollower | ThesisFollower
+    if thesis:
+        follower = ThesisFollower(card, chair.params)
+    else:
+        follower = TagFollower(card, GyroOdometry(params=chair.params), chair.params, settings)
+    outline = np.asarray(chair.params.footprint, dtype=float)
+    rows, track, people = [], [], []
+    closest = math.inf
+    frame = chair.read()
+    every = round(0.1 / chair.period)
+    for k in range(round(seconds / chair.period)):
+        command = follower(frame)
+        chair.send(command)
+        frame = chair.step()
+        circles = circles_of(chair.walkers)
+        chair_outline = transform_points(chair.pose, outline)
+        closest = min(closest, gap_to_people(chair_outline, circles))
+        if k % every == every - 1:
+            card_target = ana.tag_target()
+            origin, _ = sensor_pose(chair.pose, chair.params.depth_scan.mount)
+            distance = math.hypot(card_target.centre[0] - origin[0],
+                                  card_target.centre[1] - origin[1])
+            last = follower.log[-1] if follower.log else (0, math.nan, 0, 0, 0, "")
+            rows.append((chair.t, distance, math.isfinite(last[1]), command.v, command.w))
+            track.append((chair.pose.x, chair.pose.y, chair.pose.theta))
+            people.append(circles[:, :2].copy())
+    t, distance, seen, v, w = (np.array(c) for c in zip(*rows))
+    return FollowResult(t, distance, seen.astype(bool), v, w,
+                        [entry[5] for entry in follower.log], chair.collisions, closest,
+                        follower.status.value, follower.failure, np.array(track),
+                        np.array(people))
+
+
+__all__ = ["ANA_PATH", "BEN_PATH", "FollowResult", "follow_world", "run_follow_trial"]

@@ -1,0 +1,99 @@
+"""How far and how well the chair's camera reads a tag: a seeded sweep in the simulator.
+
+A :class:`~abcwc.perception.tags.FollowCard` is put at random distances, bearings and
+turns in front of the chair's colour camera in an empty room; each view is rendered
+with the frame's lighting, blur and noise, and read three ways: the ArUco marker (and
+its pose by :func:`~abcwc.perception.tags.square_pose`), the QR code at the camera's
+resolution, and the QR code on the image enlarged twice. The simulator's truth gives
+the marker's real range and bearing from the camera, to judge the pose.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from abcwc.params import ChairParams, default_params
+from abcwc.perception.camera import PinholeCamera
+from abcwc.perception.tags import FollowCard, detect_aruco_markers, detect_qr_codes, square_pose
+from abcwc.sim.colour_camera import PlanarTarget, render_colour
+from abcwc.sim.sensors import sensor_pose
+from abcwc.sim.world import box_world
+from abcwc.types import Pose2D
+
+
+@dataclass(frozen=True)
+class TagSweep:
+    """One row per view: its true ``distance`` (m, camera to the marker's centre),
+    ``bearing`` (rad) and ``turn`` (rad, the card turned from facing the camera), and
+    what was read: ``side_px`` (the marker's side, px; 0 if not found), the pose's
+    ``range_error`` (relative) and ``bearing_error`` (rad), NaN where not found, and
+    whether the QR code was decoded at 1x (``qr``) and 2x (``qr_upscaled``)."""
+
+    distance: np.ndarray
+    bearing: np.ndarray
+    turn: np.ndarray
+    side_px: np.ndarray
+    range_error: np.ndarray
+    bearing_error: np.ndarray
+    qr: np.ndarray
+    qr_upscaled: np.ndarray
+
+    @property
+    def found(self) -> np.ndarray:
+        return self.side_px > 0
+
+    def farthest(self, read: np.ndarray) -> float:
+        """m: the farthest view where ``read`` (a bool row) is true."""
+        return float(self.distance[read].max()) if read.any() else 0.0
+
+
+def sweep_tag_views(count: int = 120, seed: int = 0, card: FollowCard | None = None,
+                    distances: tuple[float, float] = (0.6, 9.0), max_bearing: float = 0.45,
+                    max_turn: float = 0.9, params: ChairParams | None = None) -> TagSweep:
+    """Render and read ``count`` random views (module notes): distance uniform in
+    ``distances`` (m), bearing within ``max_bearing`` (rad) of the camera's axis, the
+    card turned up to ``max_turn`` (rad) and its centre 0.8-1.0 m up."""
+    p = params or default_params()
+    card = card or FollowCard("ana", 7)
+    image = card.image()
+    camera = PinholeCamera.from_fov(640, 480, p.depth_scan.fov_deg, p.depth_scan.vertical_fov_deg)
+    room = box_world(24.0, 24.0)
+    pose = Pose2D(2.0, 12.0, 0.0)
+    origin, heading = sensor_pose(pose, p.depth_scan.mount)
+    rng = np.random.default_rng(seed)
+    rows = []
+    for _ in range(count):
+        distance = rng.uniform(*distances)
+        bearing = rng.uniform(-max_bearing, max_bearing)
+        turn = rng.uniform(-max_turn, max_turn)
+        centre = (origin[0] + distance * math.cos(heading + bearing),
+                  origin[1] + distance * math.sin(heading + bearing), rng.uniform(0.8, 1.0))
+        facing = math.atan2(origin[1] - centre[1], origin[0] - centre[0]) + turn
+        target = PlanarTarget("card", image, card.width, centre, facing)
+        right = np.array([-math.sin(facing), math.cos(facing)])
+        marker = np.array(centre[:2]) + card.marker_offset * right
+        true_range = float(np.hypot(*(marker - origin)))
+        true_bearing = math.remainder(math.atan2(marker[1] - origin[1], marker[0] - origin[0])
+                                      - heading, math.tau)
+        gray = render_colour(camera, pose, p.depth_scan.mount, p.depth_scan.height,
+                             room.walls, room.bands, np.zeros((0, 3)), (target,), rng,
+                             gray=True)
+        markers = [m for m in detect_aruco_markers(gray) if m.marker_id == card.marker_id]
+        side, range_error, bearing_error = 0.0, math.nan, math.nan
+        if markers:
+            tag = square_pose(markers[0].corners, card.side, camera)
+            side = markers[0].side_px
+            range_error = (tag.range - true_range) / true_range
+            bearing_error = math.remainder(tag.bearing - true_bearing, math.tau)
+        qr = any(c.text == card.name for c in detect_qr_codes(gray))
+        qr_upscaled = any(c.text == card.name for c in detect_qr_codes(gray, upscale=2))
+        rows.append((true_range, true_bearing, turn, side, range_error, bearing_error, qr,
+                     qr_upscaled))
+    columns = [np.array(c) for c in zip(*rows)]
+    return TagSweep(*columns[:6], columns[6].astype(bool), columns[7].astype(bool))
+
+
+__all__ = ["TagSweep", "sweep_tag_views"]

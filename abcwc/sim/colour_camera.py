@@ -1,0 +1,300 @@
+"""A colour camera in the simulator: the Kinect's RGB image of walls, objects, people,
+the floor and flat textured targets (door signs, posters, a tag on a person's back).
+
+The geometry is :mod:`abcwc.sim.depth_camera`'s: a pinhole camera looking straight
+ahead at ``height`` m, column ``u`` a ray at bearing ``-atan((u - cx) / fx)``, row ``v``
+sloping down by ``(v - cy) / fy`` per metre ahead. Each pixel shows the nearest surface
+its ray meets: a wall or object standing between two heights, a person (a cylinder up to
+``PERSON_HEIGHT``), the floor below the horizon, or the ceiling's shade above it. Walls
+are shaded by the angle between their face and the room's light (Lambert's cosine law),
+the floor darkens with distance, so the image has a horizon and corners a detector can
+see without pretending to be a photograph.
+
+**Targets** are planar rectangles carrying an image (:class:`PlanarTarget`). Each one in
+view is drawn with one homography: its four corners projected through the camera
+(``u = cx + fx x / z``, ``v = cy + fy y / z`` in the optical frame) fix the 3 x 3 map
+from the texture to the image (Hartley and Zisserman, *Multiple View Geometry*, 2nd ed.,
+section 2.3: a plane's image is a projective transformation of it), and
+``cv2.warpPerspective`` draws it. The texture is first shrunk with area averaging to
+about twice the size it will have on screen, as a camera's pixels average the light
+that falls on them (a straight warp of a large texture would alias a QR code's modules
+into noise). A target pixel is drawn only where the target is nearer than the scene
+behind it: its depth along the ray, ``z = (n . p0) / (n . d)`` for the plane through
+``p0`` with normal ``n`` and the pixel's ray ``d``, against the pixel's depth, so walls
+and people hide it as they should. A target seen from behind is not drawn.
+
+**Imaging**: each frame gets a lighting gain drawn from :attr:`Imaging.gain` (rooms and
+exposure differ), a Gaussian blur of :attr:`Imaging.blur_sigma` px (focus and motion)
+and Gaussian noise of :attr:`Imaging.noise_std` grey levels, all from the seeded
+generator the caller passes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from abcwc.perception.camera import PinholeCamera
+from abcwc.sim.depth_camera import PERSON_HEIGHT
+from abcwc.sim.raycast import cull_segments, ray_circle_hits, ray_segment_hits
+from abcwc.sim.sensors import sensor_pose
+from abcwc.sim.world import WALL_HEIGHT
+from abcwc.types import Pose2D
+
+FLOOR_RGB = np.array([150.0, 140.0, 125.0])
+"""The floor's colour near the chair (linoleum)."""
+CEILING_RGB = np.array([225.0, 225.0, 220.0])
+WALL_RGB = np.array([205.0, 200.0, 190.0])
+OBJECT_RGB = np.array([130.0, 95.0, 65.0])
+"""Furniture (anything not standing from the floor to the ceiling): wood."""
+PEOPLE_RGB = np.array([[60.0, 80.0, 140.0], [140.0, 60.0, 60.0], [70.0, 120.0, 70.0],
+                       [110.0, 100.0, 60.0]])
+"""Clothes: the k-th person wears colour k modulo 4."""
+LIGHT_DIRECTION = np.array([0.6, 0.8])
+"""Unit vector (map frame) along which the room's main light falls on the walls."""
+LUMINANCE = np.array([0.299, 0.587, 0.114], dtype=np.float32)
+"""RGB weights of grey (ITU-R BT.601)."""
+NEAREST_SURFACES = 6
+"""Surfaces kept per column (nearest first): enough for a table's top and legs before
+the wall behind it."""
+
+
+@dataclass(frozen=True)
+class PlanarTarget:
+    """A flat rectangle carrying ``image`` ((h, w) grey or (h, w, 3) RGB, uint8), ``width``
+    m wide (its height follows the image's aspect), standing upright with its centre at
+    ``centre`` (x, y, z m, map frame) and facing ``facing`` (rad: the heading of its
+    front's normal, the side it is seen from)."""
+
+    name: str
+    image: np.ndarray
+    width: float
+    centre: tuple[float, float, float]
+    facing: float
+
+    def __post_init__(self) -> None:
+        image = np.asarray(self.image)
+        if image.dtype != np.uint8 or image.ndim not in (2, 3) or min(image.shape[:2]) < 2:
+            raise ValueError(f"target {self.name!r}: image must be an (h, w) or (h, w, 3) "
+                             f"uint8 array, got {image.dtype} {image.shape}")
+        if not (math.isfinite(self.width) and self.width > 0):
+            raise ValueError(f"target {self.name!r}: width must be a finite number > 0 m, "
+                             f"got {self.width!r}")
+        if not all(math.isfinite(v) for v in (*self.centre, self.facing)):
+            raise ValueError(f"target {self.name!r}: centre and facing must be finite")
+
+    @property
+    def height(self) -> float:
+        """m, from the width and the image's aspect ratio."""
+        return self.width * self.image.shape[0] / self.image.shape[1]
+
+    def corners(self) -> np.ndarray:
+        """(4, 3) map points of the image's top-left, top-right, bottom-right and
+        bottom-left corners as seen from the front."""
+        # seen from the front, looking along -normal, the image's right is the
+        # viewing direction turned 90 degrees clockwise
+        right = np.array([-math.sin(self.facing), math.cos(self.facing), 0.0])
+        up = np.array([0.0, 0.0, 1.0])
+        c = np.asarray(self.centre, dtype=float)
+        half_w, half_h = self.width / 2, self.height / 2
+        return np.array([c - half_w * right + half_h * up, c + half_w * right + half_h * up,
+                         c + half_w * right - half_h * up, c - half_w * right - half_h * up])
+
+
+@dataclass(frozen=True)
+class Imaging:
+    """How a frame departs from the ideal: a lighting gain drawn uniformly from
+    ``gain``, a Gaussian blur of ``blur_sigma`` px and noise of ``noise_std`` grey
+    levels."""
+
+    gain: tuple[float, float] = (0.8, 1.15)
+    blur_sigma: float = 0.7
+    noise_std: float = 3.0
+
+
+def world_to_optical(points: np.ndarray, origin: np.ndarray, heading: float,
+                     height: float) -> np.ndarray:
+    """Map points (N, 3) in the camera's optical frame (N, 3: x right, y down, z ahead;
+    REP 103) for a camera at ``origin`` (x, y) and ``height`` m looking along
+    ``heading`` (rad), level."""
+    dx, dy = points[:, 0] - origin[0], points[:, 1] - origin[1]
+    c, s = math.cos(heading), math.sin(heading)
+    ahead, left = c * dx + s * dy, -s * dx + c * dy
+    return np.column_stack([-left, height - points[:, 2], ahead])
+
+
+def render_colour(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float, float],
+                  height: float, segments: np.ndarray, bands: np.ndarray,
+                  circles: np.ndarray, targets: tuple[PlanarTarget, ...] = (),
+                  rng: np.random.Generator | None = None, imaging: Imaging | None = None,
+                  max_range: float = 30.0, gray: bool = False) -> np.ndarray:
+    """The RGB image (height x width x 3, uint8) of a camera at ``height`` m on the chair
+    at ``pose``, mounted at ``mount`` (x, y, yaw in base_link), seeing wall
+    ``segments`` (N, 4) standing between ``bands`` (N, 2), people ``circles`` (M, 3),
+    the floor and ``targets`` (module notes). With ``rng``, the frame gets
+    ``imaging``'s lighting, blur and noise; without, it is the ideal image. With
+    ``gray``, the image is (height x width) luminance (ITU-R BT.601, as OpenCV's
+    RGB2GRAY), at a third of the cost."""
+    origin, heading = sensor_pose(pose, mount)
+    lateral = (np.arange(camera.width) - camera.cx) / camera.fx  # x / z of each column
+    bearing = heading - np.arctan(lateral)
+    slope = (np.arange(camera.height) - camera.cy) / camera.fy  # down per metre of z
+    near = cull_segments(np.column_stack([segments, bands]), origin, max_range)
+    walls, wall_bands = near[:, :4], near[:, 4:]
+    circles = np.asarray(circles, dtype=float).reshape(-1, 3)
+    along = 1.0 / np.sqrt(1.0 + lateral**2)  # cos of each column's offset from the axis
+    z_hits = np.concatenate([ray_segment_hits(origin, bearing, walls),
+                             ray_circle_hits(origin, bearing, circles)], axis=1)
+    z_hits = z_hits * along[:, None]  # (W, K): depth along the optical axis
+    low = np.concatenate([wall_bands[:, 0], np.zeros(len(circles))])
+    high = np.concatenate([wall_bands[:, 1], np.full(len(circles), PERSON_HEIGHT)])
+    colours = np.vstack([_wall_colours(walls, wall_bands, origin),
+                         PEOPLE_RGB[np.arange(len(circles)) % len(PEOPLE_RGB)]])
+    # each surface fills one run of rows in each column it crosses: row v's ray is at
+    # height `height - slope z` at depth z, so a surface standing from `low` to `high`
+    # z m ahead fills rows cy + fy (height - high) / z to cy + fy (height - low) / z.
+    # Paint the floor, then the nearest few surfaces of each column from far to near.
+    keep = min(NEAREST_SURFACES, z_hits.shape[1])
+    if keep < z_hits.shape[1]:
+        nearest = np.argpartition(z_hits, keep - 1, axis=1)[:, :keep]
+    else:
+        nearest = np.broadcast_to(np.arange(keep), z_hits.shape)
+    z_near = np.take_along_axis(z_hits, nearest, axis=1)  # (W, J)
+    order = np.argsort(-z_near, axis=1)  # far to near (no hit, inf, first)
+    nearest = np.take_along_axis(nearest, order, axis=1)
+    z_near = np.take_along_axis(z_near, order, axis=1)
+    rows = np.arange(camera.height, dtype=np.float32)[:, None]
+    floor_z = np.where(slope > 0, height / np.where(slope > 0, slope, 1.0), np.inf)
+    depth = floor_z.astype(np.float32)[:, None]
+    fade = 0.55 + 0.45 * np.exp(-floor_z / 12.0)  # the floor darkens into the distance
+    palette = np.vstack([CEILING_RGB, FLOOR_RGB, colours]).astype(np.float32)
+    if gray:
+        palette = palette @ LUMINANCE[:, None]
+    label = np.where(np.isfinite(floor_z), 1, 0).astype(np.int16)[:, None]
+    for j in range(keep):
+        z = z_near[:, j]
+        hit = np.isfinite(z)
+        if not hit.any():
+            continue
+        safe_z = np.where(hit, z, 1.0)
+        top = np.where(hit, camera.cy + camera.fy * (height - high[nearest[:, j]]) / safe_z,
+                       np.inf).astype(np.float32)
+        bottom = (camera.cy + camera.fy * (height - low[nearest[:, j]]) / safe_z
+                  ).astype(np.float32)
+        fills = (rows >= top) & (rows <= bottom)
+        label = np.where(fills, (2 + nearest[:, j]).astype(np.int16), label)
+        depth = np.where(fills, z.astype(np.float32), depth)
+    image = palette[label]
+    image *= np.where(label == 1, fade.astype(np.float32)[:, None], np.float32(1.0))[..., None]
+    if gray:
+        image = image[..., 0]
+    for target in sorted(targets, key=lambda t: -_distance(t, origin)):
+        _draw_target(image, depth, camera, target, origin, heading, height)
+    if rng is not None:
+        image = _imaging(image, rng, imaging or Imaging())
+    return np.clip(image, 0, 255).astype(np.uint8)
+
+
+def _wall_colours(walls: np.ndarray, bands: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """(N, 3) each segment's shade: walls by Lambert's law, furniture in wood."""
+    if not len(walls):
+        return np.zeros((0, 3))
+    edge = walls[:, 2:4] - walls[:, :2]
+    normal = np.column_stack([-edge[:, 1], edge[:, 0]])
+    normal /= np.maximum(np.hypot(*normal.T), 1e-12)[:, None]
+    lit = 0.6 + 0.4 * np.abs(normal @ LIGHT_DIRECTION)
+    full_height = (bands[:, 0] <= 0.0) & (bands[:, 1] >= WALL_HEIGHT)
+    base = np.where(full_height[:, None], WALL_RGB, OBJECT_RGB)
+    return base * lit[:, None]
+
+
+def _distance(target: PlanarTarget, origin: np.ndarray) -> float:
+    return math.hypot(target.centre[0] - origin[0], target.centre[1] - origin[1])
+
+
+def _draw_target(image: np.ndarray, depth: np.ndarray, camera: PinholeCamera,
+                 target: PlanarTarget, origin: np.ndarray, heading: float,
+                 height: float) -> None:
+    """Warp ``target`` into ``image`` where it is in front of ``depth`` (module notes)."""
+    to_camera = np.array([origin[0] - target.centre[0], origin[1] - target.centre[1]])
+    if to_camera @ [math.cos(target.facing), math.sin(target.facing)] <= 0.0:
+        return  # seen from behind
+    corners = world_to_optical(target.corners(), origin, heading, height)
+    if (corners[:, 2] < 0.05).any():
+        return  # partly behind the camera: nothing a detector could use
+    projected = np.column_stack([camera.cx + camera.fx * corners[:, 0] / corners[:, 2],
+                                 camera.cy + camera.fy * corners[:, 1] / corners[:, 2]])
+    left, top = np.floor(projected.min(axis=0)).astype(int)
+    right, bottom = np.ceil(projected.max(axis=0)).astype(int) + 1
+    left, top = max(left, 0), max(top, 0)
+    right, bottom = min(right, camera.width), min(bottom, camera.height)
+    if right <= left or bottom <= top:
+        return
+    texture = target.image
+    if image.ndim == 3 and texture.ndim == 2:
+        texture = np.repeat(texture[..., None], 3, axis=2)
+    elif image.ndim == 2 and texture.ndim == 3:
+        texture = cv2.cvtColor(texture, cv2.COLOR_RGB2GRAY)
+    on_screen = float(np.max(np.hypot(*(projected - np.roll(projected, 1, axis=0)).T)))
+    scale = min(1.0, 2.0 * on_screen / max(texture.shape[:2]))
+    if scale < 1.0:
+        texture = cv2.resize(texture, (max(2, round(texture.shape[1] * scale)),
+                                       max(2, round(texture.shape[0] * scale))),
+                             interpolation=cv2.INTER_AREA)
+    th, tw = texture.shape[:2]
+    source = np.float32([[0, 0], [tw, 0], [tw, th], [0, th]]) - 0.5
+    homography = cv2.getPerspectiveTransform(source, np.float32(projected - [left, top]))
+    size = (right - left, bottom - top)
+    warped = cv2.warpPerspective(texture, homography, size, flags=cv2.INTER_LINEAR,
+                                 borderMode=cv2.BORDER_REPLICATE)
+    mask = np.zeros((size[1], size[0]), np.uint8)
+    cv2.fillConvexPoly(mask, np.round((projected - [left, top]) * 16).astype(np.int32),
+                       1, lineType=cv2.LINE_8, shift=4)
+    # the plane's depth along each pixel's ray: z = (n . p0) / (n . d)
+    normal = world_to_optical(np.array([[math.cos(target.facing) + origin[0],
+                                         math.sin(target.facing) + origin[1], height]]),
+                              origin, heading, height)[0]
+    p0 = corners.mean(axis=0)
+    u = (np.arange(left, right) - camera.cx) / camera.fx
+    v = (np.arange(top, bottom) - camera.cy) / camera.fy
+    facing_ray = normal[0] * u[None, :] + normal[1] * v[:, None] + normal[2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        plane_z = (normal @ p0) / facing_ray
+    visible = (mask > 0) & (plane_z > 0) & (plane_z <= depth[top:bottom, left:right] + 0.02)
+    region = image[top:bottom, left:right]
+    region[visible] = warped[visible]
+
+
+def _imaging(image: np.ndarray, rng: np.random.Generator, imaging: Imaging) -> np.ndarray:
+    """Lighting gain, blur and noise (module notes)."""
+    image = image * np.float32(rng.uniform(*imaging.gain))
+    if imaging.blur_sigma > 0:
+        image = cv2.GaussianBlur(image, (0, 0), imaging.blur_sigma)
+    if imaging.noise_std > 0:
+        bank = _noise_bank(image.shape)
+        dy, dx = rng.integers(0, NOISE_MARGIN, size=2)
+        image += np.float32(imaging.noise_std) * bank[dy:dy + image.shape[0],
+                                                      dx:dx + image.shape[1]]
+    return image
+
+
+NOISE_MARGIN = 64
+"""px: frames take their noise from a bank this much larger than the image, at a
+random offset (drawing ~10^6 fresh normal numbers a frame would cost more than the
+rest of the rendering)."""
+
+
+@lru_cache(maxsize=4)
+def _noise_bank(shape: tuple[int, ...]) -> np.ndarray:
+    """Unit Gaussian noise (float32) NOISE_MARGIN px larger than ``shape`` each way,
+    the same for every run (seeded)."""
+    rows, cols = shape[0] + NOISE_MARGIN, shape[1] + NOISE_MARGIN
+    return np.random.default_rng(0).standard_normal((rows, cols, *shape[2:]),
+                                                    dtype=np.float32)
+
+
+__all__ = ["Imaging", "PlanarTarget", "render_colour", "world_to_optical"]

@@ -1,0 +1,123 @@
+"""The simulator's colour camera against closed-form projection: where a wall meets the
+floor, where a target's corners land, what hides it."""
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from abcwc.perception.camera import PinholeCamera
+from abcwc.perception.tags import aruco_marker_image, detect_aruco_markers
+from abcwc.sim import SimBase
+from abcwc.sim.colour_camera import (
+    CEILING_RGB,
+    LUMINANCE,
+    PlanarTarget,
+    render_colour,
+    world_to_optical,
+)
+from abcwc.types import CAMERA_FRAME, CameraImage, Pose2D
+
+CAMERA = PinholeCamera.from_fov(640, 480, 57.0, 43.0)
+MOUNT = (0.3, 0.0, 0.0)
+HEIGHT = 0.76
+POSE = Pose2D(0.0, 0.0, 0.0)
+ORIGIN = np.array([0.3, 0.0])
+
+
+def wall_ahead(distance: float) -> tuple[np.ndarray, np.ndarray]:
+    """One long wall across the camera's view, ``distance`` m ahead of the lens."""
+    x = ORIGIN[0] + distance
+    return np.array([[x, -20.0, x, 20.0]]), np.array([[0.0, 2.5]])
+
+
+def render(segments, bands, circles=np.zeros((0, 3)), targets=(), rng=None, gray=False):
+    return render_colour(CAMERA, POSE, MOUNT, HEIGHT, segments, bands, circles, targets,
+                         rng, gray=gray)
+
+
+def test_a_wall_meets_the_floor_and_the_ceiling_where_the_pinhole_puts_them():
+    distance = 6.0  # far enough for the wall's top to be in view
+    image = render(*wall_ahead(distance)).astype(float)
+    column = image[:, CAMERA.width // 2]
+    foot = CAMERA.cy + CAMERA.fy * HEIGHT / distance  # the wall's foot: v = cy + fy h / z
+    top = CAMERA.cy - CAMERA.fy * (2.5 - HEIGHT) / distance
+    wall = column[int(CAMERA.cy)]
+    assert np.allclose(column[math.ceil(foot) + 1], column[math.ceil(foot) + 2], atol=3)
+    assert not np.allclose(column[math.ceil(foot) + 1], wall, atol=3)  # floor below
+    assert np.allclose(column[math.floor(foot) - 1], wall)  # wall above its foot
+    assert np.allclose(column[math.floor(top) - 1], CEILING_RGB)  # ceiling over its top
+    assert np.allclose(column[math.ceil(top) + 1], wall)
+
+
+def test_a_marker_is_drawn_where_its_corners_project_and_is_found_there():
+    marker = aruco_marker_image(3, cell_px=40)
+    side = 0.3 * 6 / 8  # the black square of a 0.3 m card with a one-cell quiet zone
+    centre = (ORIGIN[0] + 2.0, 0.25, 0.9)
+    target = PlanarTarget("marker", marker, 0.3, centre, math.pi - 0.4)
+    image = render(*wall_ahead(5.0), targets=(target,), gray=True)
+    found = detect_aruco_markers(image)
+    assert [m.marker_id for m in found] == [3]
+    # the black square's corners: the card's corners shrunk by the quiet zone
+    card = target.corners()
+    square = card.mean(axis=0) + (card - card.mean(axis=0)) * (side / 0.3)
+    optical = world_to_optical(square, ORIGIN, 0.0, HEIGHT)
+    expected = np.column_stack([CAMERA.cx + CAMERA.fx * optical[:, 0] / optical[:, 2],
+                                CAMERA.cy + CAMERA.fy * optical[:, 1] / optical[:, 2]])
+    assert np.abs(found[0].corners - expected).max() < 0.35  # px
+
+
+def test_walls_and_people_hide_a_target_and_its_back_is_not_drawn():
+    card = np.zeros((40, 40), np.uint8)  # black: easy to find
+    centre = (ORIGIN[0] + 3.0, 0.0, 0.9)
+    facing_camera = PlanarTarget("card", card, 0.4, centre, math.pi)
+    walls, bands = wall_ahead(6.0)
+
+    def dark_pixels(image):
+        return int((image < 20).sum())
+
+    assert dark_pixels(render(walls, bands, targets=(facing_camera,), gray=True)) > 1000
+    between = np.vstack([walls, [[ORIGIN[0] + 1.5, -1.0, ORIGIN[0] + 1.5, 1.0]]])
+    hidden = render(between, np.vstack([bands, [[0.0, 2.5]]]), targets=(facing_camera,),
+                    gray=True)
+    assert dark_pixels(hidden) == 0
+    person = np.array([[ORIGIN[0] + 2.0, 0.0, 0.25]])
+    behind_a_person = render(walls, bands, person, targets=(facing_camera,), gray=True)
+    assert dark_pixels(behind_a_person) == 0
+    turned_away = PlanarTarget("card", card, 0.4, centre, 0.0)
+    assert dark_pixels(render(walls, bands, targets=(turned_away,), gray=True)) == 0
+
+
+def test_grey_is_the_colour_image_s_luminance_and_noise_is_seeded():
+    walls, bands = wall_ahead(3.0)
+    people = np.array([[ORIGIN[0] + 2.0, 0.5, 0.25]])
+    colour = render(walls, bands, people)
+    gray = render(walls, bands, people, gray=True)
+    assert np.abs(colour.astype(float) @ LUMINANCE - gray).max() <= 1.0
+    assert np.abs(cv2.cvtColor(colour, cv2.COLOR_RGB2GRAY).astype(int) - gray).max() <= 1
+    one = render(walls, bands, rng=np.random.default_rng(4))
+    again = render(walls, bands, rng=np.random.default_rng(4))
+    other = render(walls, bands, rng=np.random.default_rng(5))
+    assert np.array_equal(one, again) and not np.array_equal(one, other)
+
+
+def test_the_simulated_chair_sends_its_camera_image_in_the_frame():
+    chair = SimBase("lab", camera="gray")
+    image = chair.step().readings[CAMERA_FRAME]
+    assert isinstance(image, CameraImage) and image.pixels.shape == (480, 640)
+    assert (image.fx, image.cx) == (chair.camera.fx, chair.camera.cx)
+    stamps = sorted({chair.step().readings[CAMERA_FRAME].stamp for _ in range(25)})
+    assert np.allclose(np.diff(stamps[1:]), 0.1)  # 10 Hz: a new image every fifth period
+    assert CAMERA_FRAME not in SimBase("lab").step().readings
+
+
+def test_bad_camera_input_is_refused_with_what_is_allowed():
+    with pytest.raises(ValueError, match="rgb, gray"):
+        SimBase("lab", camera="infrared")
+    with pytest.raises(ValueError, match="uint8"):
+        PlanarTarget("sign", np.zeros((4, 4)), 0.2, (0, 0, 1), 0.0)
+    with pytest.raises(ValueError, match="width"):
+        PlanarTarget("sign", np.zeros((4, 4), np.uint8), 0.0, (0, 0, 1), 0.0)
+    with pytest.raises(ValueError, match="finite"):
+        PlanarTarget("sign", np.zeros((4, 4), np.uint8), 0.2, (0, math.nan, 1), 0.0)

@@ -219,6 +219,49 @@ def bench_navigator() -> dict[str, float]:
             "one decision, 95th percentile (ms)": sorted(decisions)[int(0.95 * len(decisions))]}
 
 
+@benchmark("camera", "the colour camera: one 640 x 480 frame of the lab with a tag in view "
+           "(RGB and grey, ms), and reading the tag (ArUco with its pose; QR at 1x, ms)")
+def bench_camera() -> dict[str, float]:
+    import numpy as np
+
+    from abcwc.experiments.follow_trial import follow_world
+    from abcwc.perception.tags import detect_aruco_markers, detect_qr_codes, square_pose
+    from abcwc.sim.base import SimBase
+
+    figures = {}
+    for mode in ("rgb", "gray"):
+        chair = SimBase(follow_world(), camera=mode)
+        times = []
+        for _ in range(30):
+            start = time.perf_counter()
+            image = chair.render_camera()
+            times.append((time.perf_counter() - start) * 1000)
+        figures[f"render {mode} (ms)"] = statistics.median(times)
+    gray = np.ascontiguousarray(image.pixels)
+    marker_times, qr_times = [], []
+    for _ in range(30):
+        start = time.perf_counter()
+        found = detect_aruco_markers(gray)
+        square_pose(found[0].corners, 0.2, chair.camera)
+        marker_times.append((time.perf_counter() - start) * 1000)
+        start = time.perf_counter()
+        detect_qr_codes(gray)
+        qr_times.append((time.perf_counter() - start) * 1000)
+    figures["ArUco and its pose (ms)"] = statistics.median(marker_times)
+    figures["QR code (ms)"] = statistics.median(qr_times)
+    return figures
+
+
+@benchmark("follow", "the tag follower behind Ana for 60 simulated s (camera, lidar, "
+           "tracking, obstacle checks): real-time factor", repeat=False)
+def bench_follow() -> dict[str, float]:
+    from abcwc.experiments.follow_trial import run_follow_trial
+
+    start = time.perf_counter()
+    run_follow_trial(seconds=60.0)
+    return {"real-time factor": 60.0 / (time.perf_counter() - start)}
+
+
 @benchmark("slam", "graph SLAM on the shared benchmark logs: seconds, scans per second, "
            "speed-up over the recording, relation errors (deterministic: run once)",
            repeat=False)

@@ -32,7 +32,10 @@ def wall_ahead(distance: float) -> tuple[np.ndarray, np.ndarray]:
     return np.array([[x, -20.0, x, 20.0]]), np.array([[0.0, 2.5]])
 
 
-def render(segments, bands, circles=np.zeros((0, 3)), targets=(), rng=None, gray=False):
+NO_PEOPLE = np.zeros((0, 3))
+
+
+def render(segments, bands, circles=NO_PEOPLE, targets=(), rng=None, gray=False):
     return render_colour(CAMERA, POSE, MOUNT, HEIGHT, segments, bands, circles, targets,
                          rng, gray=gray)
 

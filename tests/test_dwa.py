@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from abcwc.geometry import transform_points
 from abcwc.navigation.costmap import FREE_SPACE, LETHAL, Costmap, chair_footprint, footprint_cost
 from abcwc.navigation.dwa import DwaPlanner, covering_circles, roll_out
 from abcwc.params import default_params
@@ -144,3 +145,50 @@ def test_the_decision_plot_draws_every_roll_out_and_marks_the_chosen_one():
     assert len(dropped) == int((~result.valid).sum()) > 0
     chosen = lines[-1]
     assert np.allclose(chosen.get_xdata(), result.poses[result.best, :, 0])
+
+
+def test_a_chair_already_too_near_may_not_swing_a_corner_into_what_it_touches():
+    """An obstacle where the front-right corner will be after turning left 0.25 rad on
+    the spot, inside the front covering circle: the turn takes the circles away from it
+    (the rule "never nearer" alone would allow it) but sweeps the corner through it; the
+    outline check refuses it."""
+    costmap = Costmap.rolling_window((0.0, 0.0, 0.0), 3.0, 0.05, default=FREE_SPACE)
+    corner = FOOTPRINT.polygon[np.argmax(FOOTPRINT.polygon[:, 0] - FOOTPRINT.polygon[:, 1])]
+    rows, cols = costmap.world_to_cell(transform_points((0.0, 0.0, 0.25), corner[None]))
+    costmap.cost[rows, cols] = LETHAL
+    planner = DwaPlanner(FOOTPRINT)
+    turn = np.array([[0.0, 0.5]])
+    check = planner.check(costmap, (0.0, 0.0, 0.0), turn)
+    circles = check.clearance.reshape(len(turn), -1, 3).min(axis=2)[0]
+    assert circles[0] < planner._radius  # noqa: SLF001 - the circle already overlaps it
+    # never nearer, and half a cell farther at the end: "gets away" by the circles alone
+    assert circles.min() >= circles[0] and circles[-1] >= circles[0] + costmap.resolution / 2
+    centre = costmap.cell_to_world(rows, cols)[0]
+    outline = np.vstack([np.linspace(a, b, 20) for a, b in
+                         zip(FOOTPRINT.polygon, np.roll(FOOTPRINT.polygon, -1, axis=0))])
+    nearest = min(np.hypot(*(transform_points(tuple(p), outline) - centre).T).min()
+                  for p in check.poses[0])
+    assert nearest < costmap.resolution / math.sqrt(2)  # but the corner enters its cell
+    assert not check.valid[0]
+
+
+def test_the_circles_clearance_is_a_bound_wherever_in_its_cell_a_circle_sits():
+    """Against the exact distance from each circle's centre to the obstacle cell's
+    centre: the clearance used is never more, and never less by more than a diagonal."""
+    costmap = Costmap.rolling_window((0.0, 0.0, 0.0), 4.0, 0.05, default=FREE_SPACE)
+    obstacle = np.array([1.2, 0.4])
+    rows, cols = costmap.world_to_cell(obstacle[None])
+    costmap.cost[rows, cols] = LETHAL
+    centre = costmap.cell_to_world(rows, cols)[0]
+    planner = DwaPlanner(FOOTPRINT)
+    rng = np.random.default_rng(3)
+    samples = np.column_stack([rng.uniform(0.0, 0.7, 40), rng.uniform(-0.3, 0.3, 40)])
+    check = planner.check(costmap, (0.013, -0.021, 0.05), samples)
+    centres, _ = covering_circles(FOOTPRINT)
+    poses = check.poses[..., None, :]
+    c, s = np.cos(poses[..., 2]), np.sin(poses[..., 2])
+    x = poses[..., 0] + c * centres[:, 0] - s * centres[:, 1]
+    y = poses[..., 1] + s * centres[:, 0] + c * centres[:, 1]
+    exact = np.hypot(x - centre[0], y - centre[1])  # to the lethal cell's centre
+    assert (check.clearance <= exact + 1e-9).all()
+    assert (check.clearance >= exact - costmap.resolution * math.sqrt(2) - 1e-9).all()

@@ -67,6 +67,7 @@ waited for, not met. Everything it sends passes through the
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -96,6 +97,9 @@ from abcwc.types import (
     SensorFrame,
     Twist,
 )
+
+FollowLaw = Callable[[float, float, float], tuple[float, float]]
+"""``law(gap, bearing, receding) -> (v, w)``: a follow law (m, rad, m/s -> m/s, rad/s)."""
 
 
 @dataclass(frozen=True)
@@ -137,12 +141,16 @@ class Sighting:
 
 class TagFollower(BehaviourBase):
     """Follow whoever wears ``card`` (module notes), with the chair's ``estimator`` for
-    the odom frame. ``sightings`` keeps every sighting and ``log`` one row per decision
-    (t, range or NaN, bearing or NaN, v, w, state) for plots."""
+    the odom frame; ``law`` replaces :meth:`range_and_bearing` (its output is still
+    limited, checked against obstacles and people, and filtered). ``sightings`` keeps
+    every sighting and ``log`` one row per decision (t, range or NaN, bearing or NaN, v,
+    w, state) for plots."""
 
     def __init__(self, card: FollowCard, estimator: PoseEstimator,
-                 params: ChairParams | None = None, settings: FollowSettings | None = None):
+                 params: ChairParams | None = None, settings: FollowSettings | None = None,
+                 law: FollowLaw | None = None):
         super().__init__(rate_hz=10.0)
+        self.law: FollowLaw = law or self.range_and_bearing
         self.card = card
         self.estimator = estimator
         self.params = p = params or default_params()
@@ -303,25 +311,34 @@ class TagFollower(BehaviourBase):
                                        - camera.theta) >= 0 else -1.0
 
     def _towards(self, centre: np.ndarray, velocity: np.ndarray) -> Twist:
-        """The range-and-bearing law (module notes) for a person whose centre is at
-        ``centre`` (odom) moving at ``velocity``; the range is from the camera to their
-        near side."""
+        """The follow law for a person whose centre is at ``centre`` (odom) moving at
+        ``velocity``: the gap beyond ``distance`` from the camera to their near side,
+        their bearing and how fast they draw away, through :attr:`law`, limited."""
         s = self.settings
         camera = self._camera()
         dx, dy = centre[0] - camera.x, centre[1] - camera.y
-        alpha = wrap_angle(math.atan2(dy, dx) - camera.theta)
         distance = math.hypot(dx, dy)
+        bearing = wrap_angle(math.atan2(dy, dx) - camera.theta)
         receding = max(float(velocity[0] * dx + velocity[1] * dy) / max(distance, 1e-9), 0.0)
-        near_side = distance - s.person_radius
+        v, w = self.law(distance - s.person_radius - s.distance, bearing, receding)
+        if not (math.isfinite(v) and math.isfinite(w)):
+            raise ValueError(f"the follow law gave ({v!r}, {w!r}): it must give finite "
+                             "(v m/s, w rad/s)")
+        return Twist(min(max(float(v), 0.0), s.max_speed),
+                     min(max(float(w), -s.max_turn_rate), s.max_turn_rate))
+
+    def range_and_bearing(self, gap: float, bearing: float, receding: float
+                          ) -> tuple[float, float]:
+        """The follower's own law (module notes): ``(v, w)`` for a person ``gap`` m
+        beyond the distance to keep, at ``bearing`` rad, drawing away at ``receding``
+        m/s."""
+        s = self.settings
         # no faster than can still stop in the gap left, after the chair's reaction time
         # T: v T + v^2 / (2 b) = gap (plus what the person draws away meanwhile)
         b, lag = s.braking, self.safety.reaction_time
-        gap = max(near_side - s.distance, 0.0)
-        stoppable = receding - b * lag + math.sqrt((b * lag) ** 2 + 2 * b * gap)
-        v = min(max(receding + s.k_gap * (near_side - s.distance), 0.0), stoppable,
-                s.max_speed) * max(math.cos(alpha), 0.0)
-        w = min(max(s.k_turn * alpha, -s.max_turn_rate), s.max_turn_rate)
-        return Twist(v, w)
+        stoppable = receding - b * lag + math.sqrt((b * lag) ** 2 + 2 * b * max(gap, 0.0))
+        v = min(receding + s.k_gap * gap, stoppable) * max(math.cos(bearing), 0.0)
+        return v, s.k_turn * bearing
 
     def _search(self, frame: SensorFrame, side: float) -> Twist:
         """Turn on the spot towards ``side`` (+1 left, -1 right); fail after a full
@@ -357,12 +374,19 @@ class TagFollower(BehaviourBase):
                        raytrace_range=s.local_size / 2)
         samples = np.vstack([[wanted.v, wanted.w], self.planner.window(self._velocity)])
         samples[:, 0] = np.clip(samples[:, 0], 0.0, s.max_speed)
+        # what the safety filter will let through: a range sensor seeing something
+        # within braking distance ahead stops the wheels but not the turn, and a turn
+        # on the spot sweeps the chair's corners where the arc did not
+        gap, _ = self.safety.clearance(frame, forward=True)
+        stopped = gap <= np.array([self.safety.braking_distance(max(v, self._velocity[0]))
+                                   for v in samples[:, 0]])
+        samples[stopped, 0] = 0.0
         valid = self.planner.check(local, Pose2D(), samples).valid
         if len(people):
             valid &= self.planner.people_gap(Pose2D(), samples, people,
                                              s.people_horizon) > s.people_margin
         if valid[0]:
-            return wanted
+            return Twist(float(samples[0, 0]), float(samples[0, 1]))
         if not valid.any():
             self.state = "blocked"
             return Twist(0.0, 0.0)
@@ -444,4 +468,4 @@ class ThesisFollower(BehaviourBase):
         return command
 
 
-__all__ = ["FollowSettings", "Sighting", "TagFollower", "ThesisFollower"]
+__all__ = ["FollowLaw", "FollowSettings", "Sighting", "TagFollower", "ThesisFollower"]

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from abcwc.behaviours.follow import FollowSettings, TagFollower, ThesisFollower
+from abcwc.behaviours.follow import FollowLaw, FollowSettings, TagFollower, ThesisFollower
 from abcwc.estimation.gyro import GyroOdometry
 from abcwc.experiments.navigation_trial import gap_to_people
 from abcwc.geometry import transform_points
@@ -91,11 +91,14 @@ class FollowResult:
 
 
 def run_follow_trial(seconds: float = 120.0, seed: int = 0, thesis: bool = False,
-                     passer_by: bool = True, settings: FollowSettings | None = None
+                     passer_by: bool = True, settings: FollowSettings | None = None,
+                     law: FollowLaw | None = None, world: World | None = None
                      ) -> FollowResult:
-    """Run :class:`TagFollower` (or, with ``thesis``, A.13's :class:`ThesisFollower`)
-    for ``seconds`` in :func:`follow_world` (module notes)."""
-    chair = SimBase(follow_world(passer_by), seed=seed, lidar=True, camera="gray")
+    """Run :class:`TagFollower` (with ``law`` if given; with ``thesis``, A.13's
+    :class:`ThesisFollower`) for ``seconds`` in ``world`` (default
+    :func:`follow_world`; its first person wears the tag) (module notes)."""
+    world = world or follow_world(passer_by)
+    chair = SimBase(world, seed=seed, lidar=True, camera="gray")
     ana = chair.walkers[0]
     card = ana.spec.tag
     assert card is not None
@@ -103,7 +106,8 @@ def run_follow_trial(seconds: float = 120.0, seed: int = 0, thesis: bool = False
     if thesis:
         follower = ThesisFollower(card, chair.params)
     else:
-        follower = TagFollower(card, GyroOdometry(params=chair.params), chair.params, settings)
+        follower = TagFollower(card, GyroOdometry(params=chair.params), chair.params, settings,
+                               law)
     outline = np.asarray(chair.params.footprint, dtype=float)
     rows, track, people = [], [], []
     closest = math.inf

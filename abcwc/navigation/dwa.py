@@ -15,11 +15,17 @@ Every control cycle (``controller_frequency``, 5 Hz in the thesis's A.17):
    any of them needs).
 3. **Scoring.** A trajectory whose footprint comes within reach of a lethal or unknown
    cell, or leaves the costmap, is dropped (if the chair is already that near, as after
-   a push or a swerve, a trajectory counts if it never brings it nearer and ends half a
-   cell farther away: it can get away instead of freezing). The footprint is checked as three equal
-   circles that cover its rectangle (:func:`covering_circles`), against a distance
-   transform of the obstacles: a few centimetres more cautious at the corners than
-   base_local_planner's outline check, and one array lookup per circle. The others
+   a push or a swerve, a trajectory counts if it never brings it nearer, ends half a
+   cell farther away, and keeps the footprint's outline itself off every obstacle: it
+   can get away instead of freezing, but not by swinging a corner into what the
+   circles already overlap). The footprint is checked as three equal circles that
+   cover its rectangle (:func:`covering_circles`), against a distance transform of the
+   obstacles: a few centimetres more cautious at the corners than base_local_planner's
+   outline check, and one array lookup per circle. The transform measures from cell
+   centre to cell centre, so a circle's clearance is taken as the transform at its
+   cell less its centre's distance from that cell's centre, and must exceed its radius
+   by half a cell's diagonal (where in its cell the obstacle may lie): a bound, not an
+   estimate, so the outline never reaches an obstacle's cell. The others
    cost (base_local_planner's ``meter_scoring``)::
 
        pdist_scale * path_distance + gdist_scale * goal_distance + occdist_scale * max_cost
@@ -111,9 +117,10 @@ def roll_out(pose: PoseLike, samples: np.ndarray, sim_time: float, steps: int) -
 @dataclass(frozen=True)
 class FootprintCheck:
     """Roll-outs and their collision check: ``poses`` (S, T + 1, 3), the covering
-    circles' costmap cells (``rows``, ``cols``: S x (T + 1) x circles), the
-    ``clearance`` map (m to the nearest lethal or unknown cell), the clearance each
-    circle ``needed`` (m) and which samples are ``valid`` (S,)."""
+    circles' costmap cells (``rows``, ``cols``: S x (T + 1) x circles), each circle's
+    ``clearance`` there (m, a lower bound of its centre's distance to the nearest
+    lethal or unknown cell's centre), the clearance each circle ``needed`` (m) and
+    which samples are ``valid`` (S,)."""
 
     poses: np.ndarray
     rows: np.ndarray
@@ -139,6 +146,7 @@ class DwaPlanner:
         if not (math.isfinite(padding) and padding >= 0):
             raise ValueError(f"padding must be a finite number >= 0 m, got {padding!r}")
         self._circles, radius = covering_circles(footprint)
+        self._outline = _outline_points(footprint.polygon, spacing=0.025)
         self._radius = radius + padding  # costmap_2d's footprint_padding
         if not (math.isfinite(braking_delay) and braking_delay >= 0):
             raise ValueError(f"braking_delay must be a finite number >= 0 s, "
@@ -215,7 +223,7 @@ class DwaPlanner:
                 # the way that keeps farthest from both: a chair that flees a person
                 # only to graze a wall, with the wheels' lag behind the command, hits it
                 evading = True
-                wall_gap = clearance[rows, cols].reshape(len(samples), -1).min(axis=1) - needed
+                wall_gap = clearance.reshape(len(samples), -1).min(axis=1) - needed
                 score = np.where(valid, np.minimum(gap, wall_gap), -np.inf)
                 # of the ways about as good as the best, the slowest: standing off
                 # rather than driving on when driving on gains nothing
@@ -246,24 +254,25 @@ class DwaPlanner:
         poses = roll_out(pose, samples, lp.sim_time, steps)
         # the footprint as covering circles at every pose: clear if every circle's centre
         # is farther than its radius from the nearest lethal or unknown cell
-        c, s = np.cos(poses[..., 2:]), np.sin(poses[..., 2:])
-        cx = poses[..., :1] + c * self._circles[:, 0] - s * self._circles[:, 1]
-        cy = poses[..., 1:2] + s * self._circles[:, 0] + c * self._circles[:, 1]
-        rows, cols = costmap.xy_to_cell(cx, cy)
-        on_map = costmap.contains(rows, cols).reshape(len(samples), -1).all(axis=1)
-        rows = np.clip(rows, 0, costmap.height - 1)
-        cols = np.clip(cols, 0, costmap.width - 1)
         clearance = ndimage.distance_transform_edt(costmap.cost < LETHAL) * costmap.resolution
-        # a cell's distance is centre to centre: half a cell's diagonal is the slack
+        rows, cols, on_map, near = _clearance_of(costmap, clearance, poses, self._circles)
+        on_map = on_map.reshape(len(samples), -1).all(axis=1)
+        # an obstacle lies anywhere in its cell: up to half the cell's diagonal nearer
+        # than the cell's centre, from which the distance transform measures
         slack = costmap.resolution / math.sqrt(2)
         needed = self._radius + slack
-        here = float(clearance[rows[0, 0], cols[0, 0]].min())  # the chair's circles now
+        here = float(near[0, 0].min())  # the chair's circles now
         if here <= needed:  # already closer than allowed: only ways that get away count
-            along = clearance[rows, cols].min(axis=2).reshape(len(samples), -1)
+            along = near.min(axis=2).reshape(len(samples), -1)
             clear = (along >= here) & (along[:, -1:] >= here + costmap.resolution / 2)
+            # that close, a circle may already overlap an obstacle the outline is clear
+            # of, and a way that keeps the circles no nearer can still swing a corner
+            # into it: the outline itself must stay off every obstacle
+            outline = _clearance_of(costmap, clearance, poses, self._outline)
+            clear &= (outline[2] & (outline[3] > slack)).all(axis=2)
         else:
-            clear = (clearance[rows, cols] > needed).reshape(len(samples), -1)
-        return FootprintCheck(poses, rows, cols, clearance, needed, on_map & clear.all(axis=1))
+            clear = (near > needed).reshape(len(samples), -1)
+        return FootprintCheck(poses, rows, cols, near, needed, on_map & clear.all(axis=1))
 
     def people_gap(self, pose: PoseLike, samples: np.ndarray, people: np.ndarray,
                     horizon: float, dt: float = 0.05) -> np.ndarray:
@@ -317,6 +326,53 @@ class DwaPlanner:
         goal = np.array([[np.clip(rows[nearest], 0, costmap.height - 1),
                           np.clip(cols[nearest], 0, costmap.width - 1)]])
         return goal, goal
+
+
+def _clearance_of(costmap: Costmap, clearance: np.ndarray, poses: np.ndarray,
+                  points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """For ``points`` (P, 2, base_link) at every pose (S, T, 3): their cells' rows and
+    columns (clipped to the map), whether they are on the map, and a lower bound of each
+    point's distance (m) to the nearest lethal cell's centre: the distance transform at
+    its cell's centre less the point's own distance from that centre (S, T, P each)."""
+    c, s = np.cos(poses[..., 2:]), np.sin(poses[..., 2:])
+    if costmap.origin.theta != 0.0:  # a turned grid: the general transforms
+        x = poses[..., :1] + c * points[:, 0] - s * points[:, 1]
+        y = poses[..., 1:2] + s * points[:, 0] + c * points[:, 1]
+        rows, cols = costmap.xy_to_cell(x, y)
+        centres = costmap.cell_to_world(rows, cols)
+        off = np.hypot(x - centres[..., 0], y - centres[..., 1])
+    else:  # in cell units: the cell is the floor, its centre half a cell on
+        scale = 1.0 / costmap.resolution
+        u = (poses[..., :1] - costmap.origin.x) * scale + (
+            c * points[:, 0] - s * points[:, 1]) * scale
+        v = (poses[..., 1:2] - costmap.origin.y) * scale + (
+            s * points[:, 0] + c * points[:, 1]) * scale
+        floor_u, floor_v = np.floor(u), np.floor(v)
+        u -= floor_u
+        u -= 0.5
+        v -= floor_v
+        v -= 0.5
+        u *= u
+        v *= v
+        u += v
+        off = np.sqrt(u, out=u)
+        off *= costmap.resolution
+        cols, rows = floor_u.astype(np.intp), floor_v.astype(np.intp)
+    on_map = (rows >= 0) & (rows < costmap.height) & (cols >= 0) & (cols < costmap.width)
+    np.clip(rows, 0, costmap.height - 1, out=rows)
+    np.clip(cols, 0, costmap.width - 1, out=cols)
+    near = clearance.ravel()[rows * clearance.shape[1] + cols]
+    near -= off
+    return rows, cols, on_map, near
+
+
+def _outline_points(polygon: np.ndarray, spacing: float) -> np.ndarray:
+    """(P, 2) points along a closed polygon's edges, at most ``spacing`` m apart."""
+    points = []
+    for a, b in zip(polygon, np.roll(polygon, -1, axis=0)):
+        count = max(1, math.ceil(np.hypot(*(b - a)) / spacing))
+        points.append(a + np.linspace(0.0, 1.0, count, endpoint=False)[:, None] * (b - a))
+    return np.vstack(points)
 
 
 def _nearest_distance(cells: np.ndarray, targets: np.ndarray) -> np.ndarray:

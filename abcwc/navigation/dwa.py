@@ -256,14 +256,14 @@ class DwaPlanner:
         # is farther than its radius from the nearest lethal or unknown cell
         clearance = ndimage.distance_transform_edt(costmap.cost < LETHAL) * costmap.resolution
         rows, cols, on_map, near = _clearance_of(costmap, clearance, poses, self._circles)
-        on_map = on_map.reshape(len(samples), -1).all(axis=1)
+        nearest = np.where(on_map, near, -np.inf).min(axis=2)  # (S, T): off the map: out
         # an obstacle lies anywhere in its cell: up to half the cell's diagonal nearer
         # than the cell's centre, from which the distance transform measures
         slack = costmap.resolution / math.sqrt(2)
         needed = self._radius + slack
-        here = float(near[0, 0].min())  # the chair's circles now
+        here = float(nearest[0, 0])  # the chair's circles now
         if here <= needed:  # already closer than allowed: only ways that get away count
-            along = near.min(axis=2).reshape(len(samples), -1)
+            along = nearest
             clear = (along >= here) & (along[:, -1:] >= here + costmap.resolution / 2)
             # that close, a circle may already overlap an obstacle the outline is clear
             # of, and a way that keeps the circles no nearer can still swing a corner
@@ -271,8 +271,8 @@ class DwaPlanner:
             outline = _clearance_of(costmap, clearance, poses, self._outline)
             clear &= (outline[2] & (outline[3] > slack)).all(axis=2)
         else:
-            clear = (near > needed).reshape(len(samples), -1)
-        return FootprintCheck(poses, rows, cols, near, needed, on_map & clear.all(axis=1))
+            clear = nearest > needed
+        return FootprintCheck(poses, rows, cols, near, needed, clear.all(axis=1))
 
     def people_gap(self, pose: PoseLike, samples: np.ndarray, people: np.ndarray,
                     horizon: float, dt: float = 0.05) -> np.ndarray:
@@ -334,19 +334,21 @@ def _clearance_of(costmap: Costmap, clearance: np.ndarray, poses: np.ndarray,
     columns (clipped to the map), whether they are on the map, and a lower bound of each
     point's distance (m) to the nearest lethal cell's centre: the distance transform at
     its cell's centre less the point's own distance from that centre (S, T, P each)."""
-    c, s = np.cos(poses[..., 2:]), np.sin(poses[..., 2:])
     if costmap.origin.theta != 0.0:  # a turned grid: the general transforms
+        c, s = np.cos(poses[..., 2:]), np.sin(poses[..., 2:])
         x = poses[..., :1] + c * points[:, 0] - s * points[:, 1]
         y = poses[..., 1:2] + s * points[:, 0] + c * points[:, 1]
         rows, cols = costmap.xy_to_cell(x, y)
         centres = costmap.cell_to_world(rows, cols)
         off = np.hypot(x - centres[..., 0], y - centres[..., 1])
-    else:  # in cell units: the cell is the floor, its centre half a cell on
+    else:  # in cell units (single precision: a cell is 1, the map a few hundred): the
+        # cell is the floor, its centre half a cell on
         scale = 1.0 / costmap.resolution
-        u = (poses[..., :1] - costmap.origin.x) * scale + (
-            c * points[:, 0] - s * points[:, 1]) * scale
-        v = (poses[..., 1:2] - costmap.origin.y) * scale + (
-            s * points[:, 0] + c * points[:, 1]) * scale
+        heading = poses[..., 2:].astype(np.float32)
+        c, s = np.cos(heading), np.sin(heading)
+        px, py = (points * scale).astype(np.float32).T
+        u = ((poses[..., :1] - costmap.origin.x) * scale).astype(np.float32) + (c * px - s * py)
+        v = ((poses[..., 1:2] - costmap.origin.y) * scale).astype(np.float32) + (s * px + c * py)
         floor_u, floor_v = np.floor(u), np.floor(v)
         u -= floor_u
         u -= 0.5
@@ -356,7 +358,7 @@ def _clearance_of(costmap: Costmap, clearance: np.ndarray, poses: np.ndarray,
         v *= v
         u += v
         off = np.sqrt(u, out=u)
-        off *= costmap.resolution
+        off *= np.float32(costmap.resolution)
         cols, rows = floor_u.astype(np.intp), floor_v.astype(np.intp)
     on_map = (rows >= 0) & (rows < costmap.height) & (cols >= 0) & (cols < costmap.width)
     np.clip(rows, 0, costmap.height - 1, out=rows)

@@ -225,7 +225,7 @@ def bench_camera() -> dict[str, float]:
     import numpy as np
 
     from abcwc.experiments.follow_trial import follow_world
-    from abcwc.perception.tags import detect_aruco_markers, detect_qr_codes, square_pose
+    from abcwc.perception.tags import detect_qr_codes, find_marker
     from abcwc.sim.base import SimBase
 
     figures = {}
@@ -241,8 +241,7 @@ def bench_camera() -> dict[str, float]:
     marker_times, qr_times = [], []
     for _ in range(30):
         start = time.perf_counter()
-        found = detect_aruco_markers(gray)
-        square_pose(found[0].corners, 0.2, chair.camera)
+        find_marker(gray, 7, 0.2, chair.camera)
         marker_times.append((time.perf_counter() - start) * 1000)
         start = time.perf_counter()
         detect_qr_codes(gray)

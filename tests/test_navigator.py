@@ -180,15 +180,22 @@ def test_a_walker_turning_back_towards_a_following_chair_is_never_touched():
     assert navigator.status is Status.SUCCEEDED, navigator.failure
 
 
-def test_people_tracker_finds_a_walker_and_its_velocity():
+@pytest.mark.parametrize("with_map", [True, False])
+def test_people_tracker_finds_a_walker_and_its_velocity(with_map):
+    """With the static map the walls are explained away; without one every return is
+    unexplained, and only the walker's compact blob (not the room's long walls) becomes
+    a track. Either way one track, on the walker, at its velocity."""
     walker = {"name": "w", "path": [[3.0, 1.0], [3.0, 9.0]], "speed": 0.8, "radius": 0.25,
               "loop": False}
     world = world_from_dict({"name": "room", "walls": [[[0, 0], [10, 0], [10, 10], [0, 10],
                                                         [0, 0]]],
                              "places": {"start": [7.0, 5.0, math.pi]}, "people": [walker]})
     chair = SimBase(world, seed=8, lidar=True)
-    navigator = Navigator.for_world(world)
-    tracker = PeopleTracker(navigator.static_map.cost == 254, navigator.static_map)
+    if with_map:
+        static = Navigator.for_world(world).static_map
+        tracker = PeopleTracker(static.cost == 254, static)
+    else:
+        tracker = PeopleTracker(None, None, max_extent=0.7)
     sensor = Pose2D(7.0 + math.cos(math.pi) * chair.params.lidar.mount[0], 5.0, math.pi)
     last = -1.0
     for _ in range(150):
@@ -202,27 +209,7 @@ def test_people_tracker_finds_a_walker_and_its_velocity():
     assert np.allclose(tracks[0].velocity, (0.0, 0.8), atol=0.1)
 
 
-def test_without_a_map_the_tracker_tells_a_walker_from_the_walls_by_size():
-    """No static map: every return is unexplained, and only the walker's compact blob
-    (not the room's long walls) becomes a track, with its velocity."""
-    walker = {"name": "w", "path": [[3.0, 1.0], [3.0, 9.0]], "speed": 0.8, "radius": 0.25,
-              "loop": False}
-    world = world_from_dict({"name": "room", "walls": [[[0, 0], [10, 0], [10, 10], [0, 10],
-                                                        [0, 0]]],
-                             "places": {"start": [7.0, 5.0, math.pi]}, "people": [walker]})
-    chair = SimBase(world, seed=8, lidar=True)
-    tracker = PeopleTracker(None, None, max_extent=0.7)
-    sensor = Pose2D(7.0 + math.cos(math.pi) * chair.params.lidar.mount[0], 5.0, math.pi)
-    last = -1.0
-    for _ in range(150):
-        frame = chair.step()
-        if frame.lidar.stamp > last:
-            last = frame.lidar.stamp
-            tracks = tracker.update(frame.lidar, sensor, frame.lidar.stamp)
-    assert len(tracks) == 1
-    x, y, _ = chair.walkers[0].circle
-    assert np.hypot(*(tracks[0].position - (x, y))) < 0.1
-    assert np.allclose(tracks[0].velocity, (0.0, 0.8), atol=0.1)
+def test_a_tracker_takes_a_map_whole_or_none():
     with pytest.raises(ValueError, match="neither"):
         PeopleTracker(np.zeros((2, 2), bool), None)
 

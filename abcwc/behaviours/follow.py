@@ -82,12 +82,7 @@ from abcwc.navigation.dwa import DwaPlanner
 from abcwc.navigation.people import PeopleTracker
 from abcwc.params import ChairParams, default_params, load_navigation_params
 from abcwc.perception.camera import PinholeCamera
-from abcwc.perception.tags import (
-    MIN_POSE_SIDE_PX,
-    FollowCard,
-    detect_aruco_markers,
-    square_pose,
-)
+from abcwc.perception.tags import MIN_POSE_SIDE_PX, FollowCard, find_marker
 from abcwc.types import (
     CAMERA_FRAME,
     LIDAR_FRAME,
@@ -249,18 +244,16 @@ class TagFollower(BehaviourBase):
     def _look(self, image: CameraImage) -> Sighting | None:
         """The person's marker in ``image``, as a sighting (None if not seen, or too
         small to range)."""
-        markers = [m for m in detect_aruco_markers(image.pixels)
-                   if m.marker_id == self.card.marker_id]
-        if not markers or markers[0].side_px < self.settings.min_marker_px:
+        found = find_marker(image.pixels, self.card.marker_id, self.card.side,
+                            PinholeCamera.of_image(image))
+        if found is None or found[0].side_px < self.settings.min_marker_px:
             return None
-        h, w = image.pixels.shape[:2]
-        camera = PinholeCamera(w, h, image.fx, image.fy, image.cx, image.cy)
-        tag = square_pose(markers[0].corners, self.card.side, camera)
+        tag = found[1]
         # the card's middle, beside the marker along the card's own x axis (its right)
         middle = tag.position - self.card.marker_offset * tag.rotation[:, 0]
         # optical (x right, z ahead) -> the camera's floor frame (x ahead, y left)
-        ahead, left = middle[2], -middle[0]
-        in_base = compose(Pose2D(*self.params.depth_scan.mount), Pose2D(ahead, left, 0.0))
+        in_base = compose(Pose2D(*self.params.depth_scan.mount),
+                          Pose2D(middle[2], -middle[0], 0.0))
         in_odom = compose(self.pose, in_base)
         return Sighting(image.stamp, (in_odom.x, in_odom.y), tag.range, tag.bearing)
 
@@ -449,15 +442,13 @@ class ThesisFollower(BehaviourBase):
         if not isinstance(image, CameraImage) or image.stamp <= self._last_image:
             return self._last_command if isinstance(self._last_command, Twist) else Twist(0, 0)
         self._last_image = image.stamp
-        markers = [m for m in detect_aruco_markers(image.pixels)
-                   if m.marker_id == self.card.marker_id]
-        if not markers:
+        found = find_marker(image.pixels, self.card.marker_id, self.card.side,
+                            PinholeCamera.of_image(image))
+        if found is None:
             self._previous = None
             self.log.append((frame.t, math.nan, math.nan, 0.0, 0.0, "searching"))
             return Twist(0.0, 0.0)
-        h, w = image.pixels.shape[:2]
-        camera = PinholeCamera(w, h, image.fx, image.fy, image.cx, image.cy)
-        tag = square_pose(markers[0].corners, self.card.side, camera)
+        tag = found[1]
         previous, self._previous = self._previous, tag.position
         if previous is None:
             command = Twist(0.0, 0.0)

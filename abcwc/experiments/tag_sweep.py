@@ -17,7 +17,7 @@ import numpy as np
 
 from abcwc.params import ChairParams, default_params
 from abcwc.perception.camera import PinholeCamera
-from abcwc.perception.tags import FollowCard, detect_aruco_markers, detect_qr_codes, square_pose
+from abcwc.perception.tags import FollowCard, detect_qr_codes, find_marker
 from abcwc.sim.colour_camera import PlanarTarget, render_colour
 from abcwc.sim.sensors import sensor_pose
 from abcwc.sim.world import box_world
@@ -81,11 +81,11 @@ def sweep_tag_views(count: int = 120, seed: int = 0, card: FollowCard | None = N
         gray = render_colour(camera, pose, p.depth_scan.mount, p.depth_scan.height,
                              room.walls, room.bands, np.zeros((0, 3)), (target,), rng,
                              gray=True)
-        markers = [m for m in detect_aruco_markers(gray) if m.marker_id == card.marker_id]
+        found = find_marker(gray, card.marker_id, card.side, camera)
         side, range_error, bearing_error = 0.0, math.nan, math.nan
-        if markers:
-            tag = square_pose(markers[0].corners, card.side, camera)
-            side = markers[0].side_px
+        if found is not None:
+            marker, tag = found
+            side = marker.side_px
             range_error = (tag.range - true_range) / true_range
             bearing_error = math.remainder(tag.bearing - true_bearing, math.tau)
         qr = any(c.text == card.name for c in detect_qr_codes(gray))

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 from abcwc.params import RangeSensorParams
+from abcwc.types import CameraImage
 
 
 @dataclass(frozen=True)
@@ -27,6 +28,13 @@ class PinholeCamera:
         fx = width / 2 / math.tan(math.radians(horizontal_fov_deg) / 2)
         fy = height / 2 / math.tan(math.radians(vertical_fov_deg) / 2)
         return cls(width, height, fx, fy, (width - 1) / 2, (height - 1) / 2)
+
+
+    @classmethod
+    def of_image(cls, image: CameraImage) -> PinholeCamera:
+        """The camera that took ``image`` (its size and the intrinsics it carries)."""
+        height, width = image.pixels.shape[:2]
+        return cls(width, height, image.fx, image.fy, image.cx, image.cy)
 
 
 def kinect_camera(params: RangeSensorParams, width: int = 640) -> PinholeCamera:

@@ -319,6 +319,17 @@ def square_pose(corners: np.ndarray, side: float, camera: PinholeCamera,
     return TagPose(best[2].ravel().copy(), rotation, best[0])
 
 
+def find_marker(gray: np.ndarray, marker_id: int, side: float, camera: PinholeCamera
+                ) -> tuple[TagDetection, TagPose] | None:
+    """Marker ``marker_id`` of :data:`ARUCO_DICTIONARY` in ``gray`` (the first, if
+    several) and its pose as a square of ``side`` m seen by ``camera``; None if it is
+    not in the image."""
+    for marker in detect_aruco_markers(gray):
+        if marker.marker_id == marker_id:
+            return marker, square_pose(marker.corners, side, camera)
+    return None
+
+
 def _gray(image: np.ndarray) -> np.ndarray:
     image = np.asarray(image)
     if image.dtype != np.uint8:
@@ -330,4 +341,5 @@ def _gray(image: np.ndarray) -> np.ndarray:
 
 __all__ = ["ARUCO_DICTIONARY", "MIN_POSE_SIDE_PX", "FollowCard", "TagDetection", "TagPose",
            "aruco_marker_image", "camera_matrix", "detect_aruco_markers", "detect_qr_codes",
+           "find_marker",
            "qr_code_image", "qr_modules", "refine_square_edges", "square_pose"]

@@ -39,8 +39,7 @@ import cv2
 import numpy as np
 
 from abcwc.perception.camera import PinholeCamera
-from abcwc.sim.depth_camera import PERSON_HEIGHT
-from abcwc.sim.raycast import cull_segments, ray_circle_hits, ray_segment_hits
+from abcwc.sim.depth_camera import column_hits, floor_depth
 from abcwc.sim.sensors import sensor_pose
 from abcwc.sim.world import WALL_HEIGHT
 from abcwc.types import Pose2D
@@ -140,20 +139,11 @@ def render_colour(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float
     ``gray``, the image is (height x width) luminance (ITU-R BT.601, as OpenCV's
     RGB2GRAY), at a third of the cost."""
     origin, heading = sensor_pose(pose, mount)
-    lateral = (np.arange(camera.width) - camera.cx) / camera.fx  # x / z of each column
-    bearing = heading - np.arctan(lateral)
-    slope = (np.arange(camera.height) - camera.cy) / camera.fy  # down per metre of z
-    near = cull_segments(np.column_stack([segments, bands]), origin, max_range)
-    walls, wall_bands = near[:, :4], near[:, 4:]
-    circles = np.asarray(circles, dtype=float).reshape(-1, 3)
-    along = 1.0 / np.sqrt(1.0 + lateral**2)  # cos of each column's offset from the axis
-    z_hits = np.concatenate([ray_segment_hits(origin, bearing, walls),
-                             ray_circle_hits(origin, bearing, circles)], axis=1)
-    z_hits = z_hits * along[:, None]  # (W, K): depth along the optical axis
-    low = np.concatenate([wall_bands[:, 0], np.zeros(len(circles))])
-    high = np.concatenate([wall_bands[:, 1], np.full(len(circles), PERSON_HEIGHT)])
-    colours = np.vstack([_wall_colours(walls, wall_bands, origin),
-                         PEOPLE_RGB[np.arange(len(circles)) % len(PEOPLE_RGB)]])
+    seen = column_hits(camera, origin, heading, segments, bands, circles, max_range)
+    z_hits, low, high, slope = seen.z, seen.low, seen.high, seen.slope
+    people = len(low) - len(seen.walls)
+    colours = np.vstack([_wall_colours(seen.walls, seen.bands, origin),
+                         PEOPLE_RGB[np.arange(people) % len(PEOPLE_RGB)]])
     # each surface fills one run of rows in each column it crosses: row v's ray is at
     # height `height - slope z` at depth z, so a surface standing from `low` to `high`
     # z m ahead fills rows cy + fy (height - high) / z to cy + fy (height - low) / z.
@@ -168,7 +158,7 @@ def render_colour(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float
     nearest = np.take_along_axis(nearest, order, axis=1)
     z_near = np.take_along_axis(z_near, order, axis=1)
     rows = np.arange(camera.height, dtype=np.float32)[:, None]
-    floor_z = np.where(slope > 0, height / np.where(slope > 0, slope, 1.0), np.inf)
+    floor_z = floor_depth(slope, height)
     depth = floor_z.astype(np.float32)[:, None]
     fade = 0.55 + 0.45 * np.exp(-floor_z / 12.0)  # the floor darkens into the distance
     palette = np.vstack([CEILING_RGB, FLOOR_RGB, colours]).astype(np.float32)

@@ -159,7 +159,7 @@ def test_a_chair_already_too_near_may_not_swing_a_corner_into_what_it_touches():
     planner = DwaPlanner(FOOTPRINT)
     turn = np.array([[0.0, 0.5]])
     check = planner.check(costmap, (0.0, 0.0, 0.0), turn)
-    circles = check.clearance.reshape(len(turn), -1, 3).min(axis=2)[0]
+    circles = check.clearance.min(axis=0)[0]  # the nearest circle at every step
     assert circles[0] < planner._radius  # noqa: SLF001 - the circle already overlaps it
     # never nearer, and half a cell farther at the end: "gets away" by the circles alone
     assert circles.min() >= circles[0] and circles[-1] >= circles[0] + costmap.resolution / 2
@@ -189,7 +189,8 @@ def test_the_circles_clearance_is_a_bound_wherever_in_its_cell_a_circle_sits():
     c, s = np.cos(poses[..., 2]), np.sin(poses[..., 2])
     x = poses[..., 0] + c * centres[:, 0] - s * centres[:, 1]
     y = poses[..., 1] + s * centres[:, 0] + c * centres[:, 1]
-    exact = np.hypot(x - centre[0], y - centre[1])  # to the lethal cell's centre
+    exact = np.hypot(x - centre[0], y - centre[1]).transpose(2, 0, 1)  # to the cell's centre
     single = 1e-5  # m: the check works in single precision, in cells
     assert (check.clearance <= exact + single).all()
     assert (check.clearance >= exact - costmap.resolution * math.sqrt(2) - single).all()
+

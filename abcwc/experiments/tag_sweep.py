@@ -15,13 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from abcwc.params import ChairParams, default_params
-from abcwc.perception.camera import PinholeCamera
+from abcwc.experiments.views import random_views
+from abcwc.params import ChairParams
 from abcwc.perception.tags import FollowCard, detect_qr_codes, find_marker
-from abcwc.sim.colour_camera import PlanarTarget, render_colour
-from abcwc.sim.sensors import sensor_pose
-from abcwc.sim.world import box_world
-from abcwc.types import Pose2D
 
 
 @dataclass(frozen=True)
@@ -56,31 +52,14 @@ def sweep_tag_views(count: int = 120, seed: int = 0, card: FollowCard | None = N
     """Render and read ``count`` random views (module notes): distance uniform in
     ``distances`` (m), bearing within ``max_bearing`` (rad) of the camera's axis, the
     card turned up to ``max_turn`` (rad) and its centre 0.8-1.0 m up."""
-    p = params or default_params()
     card = card or FollowCard("ana", 7)
-    image = card.image()
-    camera = PinholeCamera.from_fov(640, 480, p.depth_scan.fov_deg, p.depth_scan.vertical_fov_deg)
-    room = box_world(24.0, 24.0)
-    pose = Pose2D(2.0, 12.0, 0.0)
-    origin, heading = sensor_pose(pose, p.depth_scan.mount)
-    rng = np.random.default_rng(seed)
     rows = []
-    for _ in range(count):
-        distance = rng.uniform(*distances)
-        bearing = rng.uniform(-max_bearing, max_bearing)
-        turn = rng.uniform(-max_turn, max_turn)
-        centre = (origin[0] + distance * math.cos(heading + bearing),
-                  origin[1] + distance * math.sin(heading + bearing), rng.uniform(0.8, 1.0))
-        facing = math.atan2(origin[1] - centre[1], origin[0] - centre[0]) + turn
-        target = PlanarTarget("card", image, card.width, centre, facing)
-        right = np.array([-math.sin(facing), math.cos(facing)])
-        marker = np.array(centre[:2]) + card.marker_offset * right
-        true_range = float(np.hypot(*(marker - origin)))
-        true_bearing = math.remainder(math.atan2(marker[1] - origin[1], marker[0] - origin[0])
-                                      - heading, math.tau)
-        gray = render_colour(camera, pose, p.depth_scan.mount, p.depth_scan.height,
-                             room.walls, room.bands, np.zeros((0, 3)), (target,), rng,
-                             gray=True)
+    for view in random_views(card.image(), card.width, count, seed, distances, max_bearing,
+                             max_turn, (0.8, 1.0), params):
+        right = np.array([-math.sin(view.facing), math.cos(view.facing)])
+        marker = np.array(view.centre[:2]) + card.marker_offset * right
+        true_range, true_bearing = view.range_and_bearing(marker)
+        gray, camera, turn = view.gray, view.camera, view.turn
         found = find_marker(gray, card.marker_id, card.side, camera)
         side, range_error, bearing_error = 0.0, math.nan, math.nan
         if found is not None:

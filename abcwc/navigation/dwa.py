@@ -117,14 +117,13 @@ def roll_out(pose: PoseLike, samples: np.ndarray, sim_time: float, steps: int) -
 @dataclass(frozen=True)
 class FootprintCheck:
     """Roll-outs and their collision check: ``poses`` (S, T + 1, 3), the covering
-    circles' costmap cells (``rows``, ``cols``: S x (T + 1) x circles), each circle's
-    ``clearance`` there (m, a lower bound of its centre's distance to the nearest
-    lethal or unknown cell's centre), the clearance each circle ``needed`` (m) and
-    which samples are ``valid`` (S,)."""
+    circles' flat costmap ``cells`` (``row * width + col``: circles x S x (T + 1)), each
+    circle's ``clearance`` there (m, the same shape: a lower bound of its centre's
+    distance to the nearest lethal or unknown cell's centre, -inf off the map), the
+    clearance each circle ``needed`` (m) and which samples are ``valid`` (S,)."""
 
     poses: np.ndarray
-    rows: np.ndarray
-    cols: np.ndarray
+    cells: np.ndarray
     clearance: np.ndarray
     needed: float
     valid: np.ndarray
@@ -192,26 +191,23 @@ class DwaPlanner:
         lp = self.local
         samples = self.window(velocity)
         check = self.check(costmap, pose, samples)
-        poses, rows, cols, clearance, needed = (check.poses, check.rows, check.cols,
-                                                check.clearance, check.needed)
-        worst = costmap.cost[rows, cols].reshape(len(samples), -1).max(axis=1)
+        poses, clearance, needed = check.poses, check.clearance, check.needed
+        worst = costmap.cost.ravel()[check.cells].max(axis=(0, 2))
         valid = check.valid.copy()
 
         path_cells, goal_cell = self._path_cells(costmap, path)
         ends = poses[:, -1]
         fronts = ends[:, :2] + lp.heading_lookahead * np.column_stack(
             [np.cos(ends[:, 2]), np.sin(ends[:, 2])])
-        terms = {name: np.zeros(len(samples)) for name in ("path", "goal", "occupancy")}
-        inside = np.ones(len(samples), dtype=bool)
+        points = np.concatenate([ends[:, :2], fronts])  # both points of every sample
+        p_rows, p_cols = costmap.xy_to_cell(points[:, 0], points[:, 1])
+        inside = costmap.contains(p_rows, p_cols).reshape(2, -1).all(axis=0)
+        cells = np.column_stack([np.clip(p_rows, 0, costmap.height - 1),
+                                 np.clip(p_cols, 0, costmap.width - 1)])
         res = costmap.resolution
-        for point in (ends[:, :2], fronts):
-            p_rows, p_cols = costmap.xy_to_cell(point[:, 0], point[:, 1])
-            inside &= costmap.contains(p_rows, p_cols)
-            p_rows = np.clip(p_rows, 0, costmap.height - 1)
-            p_cols = np.clip(p_cols, 0, costmap.width - 1)
-            cells = np.column_stack([p_rows, p_cols])
-            terms["path"] += lp.pdist_scale * _nearest_distance(cells, path_cells) * res
-            terms["goal"] += lp.gdist_scale * _nearest_distance(cells, goal_cell) * res
+        to_path = lp.pdist_scale * _nearest_distance(cells, path_cells).reshape(2, -1) * res
+        to_goal = lp.gdist_scale * _nearest_distance(cells, goal_cell).reshape(2, -1) * res
+        terms = {"path": to_path[0] + to_path[1], "goal": to_goal[0] + to_goal[1]}
         terms["occupancy"] = lp.occdist_scale * worst
         cost = terms["path"] + terms["goal"] + terms["occupancy"]
         valid &= inside
@@ -223,7 +219,7 @@ class DwaPlanner:
                 # the way that keeps farthest from both: a chair that flees a person
                 # only to graze a wall, with the wheels' lag behind the command, hits it
                 evading = True
-                wall_gap = clearance.reshape(len(samples), -1).min(axis=1) - needed
+                wall_gap = clearance.min(axis=(0, 2)) - needed
                 score = np.where(valid, np.minimum(gap, wall_gap), -np.inf)
                 # of the ways about as good as the best, the slowest: standing off
                 # rather than driving on when driving on gains nothing
@@ -255,8 +251,8 @@ class DwaPlanner:
         # the footprint as covering circles at every pose: clear if every circle's centre
         # is farther than its radius from the nearest lethal or unknown cell
         clearance = ndimage.distance_transform_edt(costmap.cost < LETHAL) * costmap.resolution
-        rows, cols, on_map, near = _clearance_of(costmap, clearance, poses, self._circles)
-        nearest = np.where(on_map, near, -np.inf).min(axis=2)  # (S, T): off the map: out
+        cells, near = _clearance_of(costmap, clearance, poses, self._circles)
+        nearest = np.minimum.reduce(near)  # (S, T): the nearest circle; off the map: out
         # an obstacle lies anywhere in its cell: up to half the cell's diagonal nearer
         # than the cell's centre, from which the distance transform measures
         slack = costmap.resolution / math.sqrt(2)
@@ -268,11 +264,11 @@ class DwaPlanner:
             # that close, a circle may already overlap an obstacle the outline is clear
             # of, and a way that keeps the circles no nearer can still swing a corner
             # into it: the outline itself must stay off every obstacle
-            outline = _clearance_of(costmap, clearance, poses, self._outline)
-            clear &= (outline[2] & (outline[3] > slack)).all(axis=2)
+            _, outline = _clearance_of(costmap, clearance, poses, self._outline)
+            clear &= np.minimum.reduce(outline) > slack
         else:
             clear = nearest > needed
-        return FootprintCheck(poses, rows, cols, near, needed, clear.all(axis=1))
+        return FootprintCheck(poses, cells, near, needed, clear.all(axis=1))
 
     def people_gap(self, pose: PoseLike, samples: np.ndarray, people: np.ndarray,
                     horizon: float, dt: float = 0.05) -> np.ndarray:
@@ -329,26 +325,28 @@ class DwaPlanner:
 
 
 def _clearance_of(costmap: Costmap, clearance: np.ndarray, poses: np.ndarray,
-                  points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """For ``points`` (P, 2, base_link) at every pose (S, T, 3): their cells' rows and
-    columns (clipped to the map), whether they are on the map, and a lower bound of each
-    point's distance (m) to the nearest lethal cell's centre: the distance transform at
-    its cell's centre less the point's own distance from that centre (S, T, P each)."""
+                  points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For ``points`` (P, 2, base_link) at every pose (S, T, 3): each point's flat cell
+    index into the map (``row * width + col``, clipped to the map) and a lower bound of
+    its distance (m) to the nearest lethal cell's centre, the distance transform at its
+    cell's centre less the point's own distance from that centre (-inf off the map);
+    both (P, S, T), point by point, so that a minimum over the points is one pass over
+    whole slabs."""
     if costmap.origin.theta != 0.0:  # a turned grid: the general transforms
-        c, s = np.cos(poses[..., 2:]), np.sin(poses[..., 2:])
-        x = poses[..., :1] + c * points[:, 0] - s * points[:, 1]
-        y = poses[..., 1:2] + s * points[:, 0] + c * points[:, 1]
+        c, s = np.cos(poses[..., 2]), np.sin(poses[..., 2])
+        x = poses[..., 0] + c * points[:, :1, None] - s * points[:, 1:, None]
+        y = poses[..., 1] + s * points[:, :1, None] + c * points[:, 1:, None]
         rows, cols = costmap.xy_to_cell(x, y)
         centres = costmap.cell_to_world(rows, cols)
         off = np.hypot(x - centres[..., 0], y - centres[..., 1])
     else:  # in cell units (single precision: a cell is 1, the map a few hundred): the
         # cell is the floor, its centre half a cell on
         scale = 1.0 / costmap.resolution
-        heading = poses[..., 2:].astype(np.float32)
+        heading = poses[..., 2].astype(np.float32)
         c, s = np.cos(heading), np.sin(heading)
-        px, py = (points * scale).astype(np.float32).T
-        u = ((poses[..., :1] - costmap.origin.x) * scale).astype(np.float32) + (c * px - s * py)
-        v = ((poses[..., 1:2] - costmap.origin.y) * scale).astype(np.float32) + (s * px + c * py)
+        px, py = (points * scale).astype(np.float32)[..., None, None].transpose(1, 0, 2, 3)
+        u = ((poses[..., 0] - costmap.origin.x) * scale).astype(np.float32) + (c * px - s * py)
+        v = ((poses[..., 1] - costmap.origin.y) * scale).astype(np.float32) + (s * px + c * py)
         floor_u, floor_v = np.floor(u), np.floor(v)
         u -= floor_u
         u -= 0.5
@@ -360,12 +358,14 @@ def _clearance_of(costmap: Costmap, clearance: np.ndarray, poses: np.ndarray,
         off = np.sqrt(u, out=u)
         off *= np.float32(costmap.resolution)
         cols, rows = floor_u.astype(np.intp), floor_v.astype(np.intp)
-    on_map = (rows >= 0) & (rows < costmap.height) & (cols >= 0) & (cols < costmap.width)
+    off_map = (rows < 0) | (rows >= costmap.height) | (cols < 0) | (cols >= costmap.width)
     np.clip(rows, 0, costmap.height - 1, out=rows)
     np.clip(cols, 0, costmap.width - 1, out=cols)
-    near = clearance.ravel()[rows * clearance.shape[1] + cols]
+    cells = rows * costmap.width + cols
+    near = clearance.ravel()[cells]
     near -= off
-    return rows, cols, on_map, near
+    near[off_map] = -np.inf
+    return cells, near
 
 
 def _outline_points(polygon: np.ndarray, spacing: float) -> np.ndarray:
@@ -381,5 +381,9 @@ def _nearest_distance(cells: np.ndarray, targets: np.ndarray) -> np.ndarray:
     """(N,) the distance (cells, centre to centre) from each of ``cells`` (N, 2) to the
     nearest of ``targets`` (K, 2): what a Euclidean distance transform of the targets
     holds at those cells, computed for the few cells asked about instead of all."""
-    gaps = cells[:, None, :].astype(float) - targets[None, :, :]
-    return np.sqrt((gaps**2).sum(axis=2).min(axis=1))
+    row_gaps = cells[:, :1].astype(float) - targets[:, 0]
+    col_gaps = cells[:, 1:].astype(float) - targets[:, 1]
+    row_gaps *= row_gaps
+    col_gaps *= col_gaps
+    row_gaps += col_gaps
+    return np.sqrt(row_gaps.min(axis=1))

@@ -24,7 +24,8 @@ from abcwc.control.interface_board import InterfaceBoard
 from abcwc.geometry import wrap_angle
 from abcwc.params import ChairParams, default_params
 from abcwc.perception.camera import PinholeCamera
-from abcwc.sim.colour_camera import render_colour
+from abcwc.perception.signs import house_sign
+from abcwc.sim.colour_camera import PlanarTarget, render_colour
 from abcwc.sim.motor import ChairErrors, MotorController, resolve_errors
 from abcwc.sim.people import (
     LOOK_AHEAD,
@@ -106,6 +107,9 @@ class SimBase(BodyMixin):
                                              p.depth_scan.vertical_fov_deg)
         self._camera_rng = rngs[6]
         self._image: CameraImage | None = None
+        self._sign_targets = tuple(  # the world's signs, as the camera draws them
+            PlanarTarget(sign.name, house_sign(sign.word), sign.width, sign.centre, sign.facing)
+            for sign in self.world.signs)
         self._build_space(self._start_pose(start), people)
         # what each sensor can see of the walls and objects from its height (static)
         w = self.world
@@ -315,8 +319,8 @@ class SimBase(BodyMixin):
         """What the colour camera sees now (with the frame's lighting, blur and noise
         drawn from the seeded generator; the ideal image with ``rng`` False)."""
         p, w, camera = self.params, self.world, self.camera
-        targets = tuple(t for t in (walker.tag_target() for walker in self.walkers)
-                        if t is not None)
+        targets = self._sign_targets + tuple(
+            t for t in (walker.tag_target() for walker in self.walkers) if t is not None)
         pixels = render_colour(camera, self.pose, p.depth_scan.mount, p.depth_scan.height,
                                w.walls, w.bands, circles_of(self.walkers), targets,
                                self._camera_rng if rng else None,

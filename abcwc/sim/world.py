@@ -11,7 +11,9 @@ A world file (``data/worlds/<name>.json``) holds::
                   "radius": 0.25, "loop": true,
                   "tag": {"text": "ana", "marker_id": 7, "side": 0.2}}],  # optional
       "objects": [{"name": "table top", "outline": [[x, y], ...],
-                   "z": [0.70, 0.75]}]             # optional
+                   "z": [0.70, 0.75]}],            # optional
+      "signs": [{"name": "exit", "word": "EXIT", "at": [x, y, z],
+                 "facing": theta, "width": 0.6}]   # optional
     }
 
 Every wall polyline becomes straight segments; a closed shape repeats its first point.
@@ -21,7 +23,10 @@ two heights ``z`` (m): a table is a top at 0.70-0.75 m over four legs from the f
 (a planar lidar at its mount height, a depth camera's band of rows); the chair collides
 with every wall and object (each is below the seated person's head). A person may wear
 a ``tag`` on their back, a :class:`~abcwc.perception.tags.FollowCard` (an ArUco marker
-and a QR code of ``text``, each ``side`` m across) that the chair's camera sees.
+and a QR code of ``text``, each ``side`` m across) that the chair's camera sees. A sign
+is a house-style door sign (:func:`~abcwc.perception.signs.house_sign`) saying ``word``,
+``width`` m wide, hung flat with its centre ``at`` (m) and its face turned to ``facing``
+(rad: the heading of the way it faces).
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from abcwc.paths import data_dir, read_document
+from abcwc.perception.signs import house_sign
 from abcwc.perception.tags import FollowCard
 from abcwc.types import Pose2D
 
@@ -58,6 +64,18 @@ class PersonSpec:
 
 
 @dataclass(frozen=True)
+class SignSpec:
+    """A house-style sign saying ``word``, ``width`` m wide, its centre at ``centre``
+    (x, y, z m) and its face towards ``facing`` (rad)."""
+
+    name: str
+    word: str
+    centre: tuple[float, float, float]
+    facing: float
+    width: float = 0.6
+
+
+@dataclass(frozen=True)
 class World:
     """Static segments (N, 4: x1 y1 x2 y2), each standing between two heights (``bands``,
     N x 2: bottom and top, m; walls from the floor to ``WALL_HEIGHT``), named places
@@ -68,6 +86,7 @@ class World:
     places: dict[str, Pose2D]
     people: tuple[PersonSpec, ...] = ()
     description: str = ""
+    signs: tuple[SignSpec, ...] = ()
     source: Path | None = field(default=None, compare=False)
     bands: np.ndarray | None = field(default=None, compare=False)
 
@@ -113,11 +132,12 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
         raise WorldError(
             f"{label}: missing {', '.join(sorted(missing))} (need name, walls, places)"
         )
-    unknown = raw.keys() - {"name", "walls", "places", "people", "objects", "description"}
+    unknown = raw.keys() - {"name", "walls", "places", "people", "objects", "signs",
+                            "description"}
     if unknown:
         raise WorldError(
             f"{label}: unknown key(s) {', '.join(sorted(unknown))}; "
-            "allowed: name, description, walls, places, people, objects"
+            "allowed: name, description, walls, places, people, objects, signs"
         )
     if not isinstance(raw["walls"], list) or not raw["walls"]:
         raise WorldError(f"{label}: walls must be a non-empty list of polylines")
@@ -185,7 +205,38 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
         description=str(raw.get("description", "")),
         source=source,
         bands=np.array(bands, dtype=float),
+        signs=tuple(_sign(sign, f"{label}: signs[{i}]")
+                    for i, sign in enumerate(_list(raw.get("signs", []), f"{label}: signs"))),
     )
+
+
+def _list(raw: object, where: str) -> list:
+    if not isinstance(raw, list):
+        raise WorldError(f"{where} must be a list")
+    return raw
+
+
+def _sign(raw: object, where: str) -> SignSpec:
+    """A ``signs`` entry as a SignSpec."""
+    if not isinstance(raw, dict) or not {"name", "word", "at", "facing"} <= raw.keys():
+        raise WorldError(f"{where} must be an object with name, word, at [x, y, z] (m), "
+                         "facing (rad) and optionally width (m)")
+    at, facing, width = raw["at"], raw["facing"], raw.get("width", 0.6)
+    if (not isinstance(at, list) or len(at) != 3
+            or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in at)
+            or not 0 < at[2] < WALL_HEIGHT):
+        raise WorldError(f"{where}.at must be [x, y, z] in m with 0 < z < {WALL_HEIGHT}, "
+                         f"got {at!r}")
+    if not (isinstance(facing, (int, float)) and math.isfinite(facing)):
+        raise WorldError(f"{where}.facing must be a finite heading in rad, got {facing!r}")
+    if not (isinstance(width, (int, float)) and 0.05 <= width <= 3):
+        raise WorldError(f"{where}.width must be 0.05..3 m, got {width!r}")
+    word = raw["word"]
+    try:
+        house_sign(word)
+    except ValueError as error:
+        raise WorldError(f"{where}.word: {error}") from None
+    return SignSpec(str(raw["name"]), word, tuple(map(float, at)), float(facing), float(width))
 
 
 def _tag(raw: object, where: str) -> FollowCard | None:

@@ -29,6 +29,8 @@ import math
 import shutil
 import subprocess
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -71,6 +73,26 @@ def missing_tools() -> list[str]:
     return missing
 
 
+@contextmanager
+def firmware_build_lock(firmware_dir: Path = FIRMWARE_DIR) -> Iterator[None]:
+    """Hold ``firmware/build/.make.lock`` while ``make`` runs: test workers and notebook
+    kernels side by side must not build the same files at once (POSIX ``flock``; where
+    there is none, as on Windows, builds are not serialised)."""
+    build = Path(firmware_dir) / "build"
+    build.mkdir(exist_ok=True)
+    try:
+        import fcntl
+    except ImportError:
+        yield
+        return
+    with open(build / ".make.lock", "w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
 def build_harness(firmware_dir: Path = FIRMWARE_DIR) -> tuple[Path, Path]:
     """Build (if needed) and return ``(harness, elf)``.
 
@@ -89,8 +111,9 @@ def build_harness(firmware_dir: Path = FIRMWARE_DIR) -> tuple[Path, Path]:
         raise FirmwareToolchainError(
             f"the firmware in the loop needs {', '.join(missing)}: "
             f"sudo apt-get install {pkgs}")
-    proc = subprocess.run(["make", "-C", str(firmware_dir), "harness"],
-                          capture_output=True, text=True, timeout=900)
+    with firmware_build_lock(firmware_dir):
+        proc = subprocess.run(["make", "-C", str(firmware_dir), "harness"],
+                              capture_output=True, text=True, timeout=900)
     if proc.returncode != 0:
         raise FirmwareToolchainError(
             f"make -C {firmware_dir} harness failed ({proc.returncode}):\n"

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from abcwc.hw.fil_base import firmware_build_lock
+
 REPO = Path(__file__).resolve().parents[2]
 FIRMWARE = REPO / "firmware"
 BUILD = FIRMWARE / "build"
@@ -56,7 +58,8 @@ def require_tools(*tools: str, headers: tuple[str, ...] = ()) -> None:
 def make(*targets: str, timeout: float = 600, **variables: str) -> subprocess.CompletedProcess:
     """Run make in firmware/; fail the test with make's output on error."""
     cmd = ["make", "-C", str(FIRMWARE), *targets, *(f"{k}={v}" for k, v in variables.items())]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    with firmware_build_lock(FIRMWARE):  # other test workers may be building too
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     if proc.returncode != 0:
         pytest.fail(
             f"{' '.join(cmd)} failed ({proc.returncode}):\n"

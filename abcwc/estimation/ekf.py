@@ -78,6 +78,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Protocol
 
 import numpy as np
 from scipy.stats import chi2
@@ -90,6 +91,7 @@ from abcwc.estimation.odometry import (
     log_wheel_travel,
     validate_log,
 )
+from abcwc.estimation.range_bearing import range_bearing
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
 from abcwc.types import Pose2D
@@ -411,6 +413,23 @@ class ChairEkf:
         self.filter.update(np.array([pose.x, pose.y, pose.theta]), H_POSE, np.asarray(cov),
                            angle=2)
 
+    def update_landmark(self, measured: tuple[float, float], landmark: tuple[float, float],
+                        mount: tuple[float, float, float], cov: np.ndarray) -> None:
+        """Update with a sighting of a landmark whose place is known: ``measured`` =
+        (range m, bearing rad) from a sensor at ``mount`` (base_link) to ``landmark``
+        (x, y, map), of covariance ``cov`` (2 x 2). The model and its Jacobian are
+        :func:`~abcwc.estimation.range_bearing.range_bearing`'s; the update is the EKF's
+        with the measurement linearised about the estimate (the linear update given
+        ``H x + (z - h(x))``, the bearing's difference wrapped)."""
+        z = np.asarray(measured, dtype=float)
+        if z.shape != (2,) or not np.isfinite(z).all() or z[0] <= 0:
+            raise ValueError(f"measured must be (range > 0 m, bearing rad), got {measured!r}")
+        expected, h = range_bearing(self.filter.x, landmark, mount)
+        innovation = np.array([z[0] - expected[0],
+                               geometry.wrap_angle(float(z[1] - expected[1]))])
+        self.filter.update(h @ self.filter.x + innovation, h, np.asarray(cov, dtype=float),
+                           angle=1)
+
 
 def absolute_fixes(log: RunLog, every: float, std: tuple[float, float, float],
                    seed: int = 0) -> dict[int, Pose2D]:
@@ -427,14 +446,35 @@ def absolute_fixes(log: RunLog, every: float, std: tuple[float, float, float],
     return {int(k): Pose2D(*(log.pose[k] + e)) for k, e in zip(rows, noise)}
 
 
+class Sighting(Protocol):
+    """A landmark read by a sensor: which one, its range (m) and bearing (rad), and the
+    2 x 2 covariance of the two (:class:`abcwc.perception.markers.MarkerSighting`)."""
+
+    marker_id: int
+    range: float
+    bearing: float
+
+    @property
+    def covariance(self) -> np.ndarray: ...
+
+
 def run_ekf(log: RunLog, ekf: ChairEkf, fixes: dict[int, Pose2D] | None = None,
-            fix_cov: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+            fix_cov: np.ndarray | None = None,
+            sightings: dict[int, list[Sighting]] | None = None,
+            landmarks: dict[int, tuple[float, float]] | None = None,
+            mount: tuple[float, float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Run the filter over a log: states ``(N, 6)`` and covariances ``(N, 6, 6)``.
 
     Row 0 is the initial state; ``fixes`` maps rows to absolute poses of covariance
-    ``fix_cov``. Needs only the counts and gyro samples, so it runs on a recording
+    ``fix_cov``; ``sightings`` maps rows to what a sensor at ``mount`` read of known
+    ``landmarks`` (id: (x, y) m): objects with ``marker_id``, ``range``, ``bearing`` and
+    ``covariance``, as :func:`abcwc.perception.markers.sight_markers` gives them. Needs
+    only the counts and gyro samples (and those readings), so it runs on a recording
     from the real chair as well as on a simulated one.
     """
+    sightings = sightings or {}
+    if sightings and (landmarks is None or mount is None):
+        raise ValueError("sightings given without the landmarks' places and the sensor's mount")
     validate_log(log, need_gyro=True)
     fixes = fixes or {}
     if fixes and fix_cov is None:
@@ -457,6 +497,11 @@ def run_ekf(log: RunLog, ekf: ChairEkf, fixes: dict[int, Pose2D] | None = None,
         ekf.update_gyro(float(log.gyro_z[k]))
         if k in fixes:
             ekf.update_pose(fixes[k], fix_cov)
+        for seen in sightings.get(k, ()):
+            if seen.marker_id in landmarks:  # type: ignore[operator]
+                ekf.update_landmark((seen.range, seen.bearing),
+                                    landmarks[seen.marker_id],  # type: ignore[index]
+                                    mount, seen.covariance)  # type: ignore[arg-type]
         states[k], covs[k] = ekf.filter.x, ekf.filter.P
     return states, covs
 

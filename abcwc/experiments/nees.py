@@ -15,11 +15,17 @@ The experiment behind issue-level figures and tests (Bar-Shalom, Li and Kirubara
 3. :func:`ekf_monte_carlo`: many seeds (in parallel processes if asked); the NEES
    averaged over runs at every step, its mean over time, and the two-sided 95 %
    chi-square band for that many runs (:func:`~abcwc.estimation.ekf.nees_band`).
+
+The fixes of step 2 come either from the simulator's truth with noise of
+:data:`FIX_STD` (``fixes="truth"``), or from the chair's camera reading the floor's
+fixed ArUco markers (``fixes="markers"``: :func:`record_with_sightings`; each reading's
+range and bearing is an update, :meth:`~abcwc.estimation.ekf.ChairEkf.update_landmark`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
@@ -39,9 +45,10 @@ from abcwc.estimation.odometry import odometry_from_log
 from abcwc.estimation.umbmark import THESIS_SIDE, e_max_syst, umbmark_corrections
 from abcwc.experiments.umbmark_trials import calibrate_distance_scale, run_umbmark
 from abcwc.log import RunLog
+from abcwc.perception.markers import MarkerSighting, sight_markers
 from abcwc.sim.base import SimBase
 from abcwc.sim.world import box_world
-from abcwc.types import Pose2D, Twist
+from abcwc.types import CAMERA_FRAME, CameraImage, Pose2D, Twist
 
 FIX_STD = (0.05, 0.05, 0.02)
 """m, m, rad: how good one landmark sighting is."""
@@ -131,15 +138,57 @@ def filter_drive(log: RunLog, bias_prior: tuple[float, float],
     return run_ekf(log, ekf, fixes, np.diag(np.square(FIX_STD)))
 
 
+def record_with_sightings(chair: SimBase, controller: Callable, seconds: float
+                          ) -> tuple[RunLog, dict[int, list[MarkerSighting]]]:
+    """``chair.run(controller, seconds)`` with the camera on, and what it read of the
+    world's fixed markers: ``{log row: sightings}``, each image's readings at the row
+    whose time is the image's."""
+    if chair.camera_mode is None:
+        raise ValueError("the chair needs its camera: SimBase(..., camera='gray')")
+    markers = {m.marker_id: m for m in chair.world.markers}
+    seen: dict[float, list[MarkerSighting]] = {}
+    last = [-math.inf]
+
+    def looking(frame):
+        image = frame.readings.get(CAMERA_FRAME)
+        if isinstance(image, CameraImage) and image.stamp > last[0]:
+            last[0] = image.stamp
+            found = sight_markers(image, markers)
+            if found:
+                seen[frame.t] = found
+        return controller(frame)
+
+    log = chair.run(looking, seconds)
+    rows = {float(t): k for k, t in enumerate(log.t)}
+    return log, {rows[t]: found for t, found in seen.items() if t in rows}
+
+
 def ekf_run(seed: int, seconds: float, calibration: OdometryCalibration,
-            fix_every: float = 10.0) -> EkfRun:
+            fix_every: float = 10.0, fixes: str = "truth") -> EkfRun:
     """One seeded drive on the floor world, filtered; see the module docstring."""
-    sim = SimBase("floor", seed=seed, errors="worn", people=False)
+    if fixes not in ("truth", "markers"):
+        raise ValueError(f"fixes must be 'truth' or 'markers', got {fixes!r}")
+    sim = SimBase("floor", seed=seed, errors="worn", people=False,
+                  camera="gray" if fixes == "markers" else None)
     bias, bias_std = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), STILL_SECONDS).gyro_z)
-    log = sim.run(FollowWaypoints(floor_mixed_drive()), seconds)
+    if fixes == "markers":
+        log, sightings = record_with_sightings(sim, FollowWaypoints(floor_mixed_drive()),
+                                               seconds)
+    else:
+        log = sim.run(FollowWaypoints(floor_mixed_drive()), seconds)
     if log.collisions[-1]:
         raise RuntimeError(f"seed {seed}: the route touched something; the drive is void")
-    states, covs = filter_drive(log, (bias, bias_std), calibration, seed, fix_every)
+    if fixes == "markers":
+        ekf = ChairEkf(Pose2D(*log.pose[0]), correction=calibration.correction,
+                       wheel_base=calibration.wheel_base, gyro_bias=bias,
+                       gyro_bias_std=bias_std,
+                       noise=noise_from_models(residual_rel=calibration.residual_rel,
+                                               horizon=fix_every))
+        landmarks = {m.marker_id: m.centre[:2] for m in sim.world.markers}
+        states, covs = run_ekf(log, ekf, sightings=sightings, landmarks=landmarks,
+                               mount=sim.params.depth_scan.mount)
+    else:
+        states, covs = filter_drive(log, (bias, bias_std), calibration, seed, fix_every)
     raw = odometry_from_log(log)
     return EkfRun(nees(log.pose, states, covs),
                   math.hypot(*(states[-1, :2] - log.pose[-1, :2])),
@@ -147,14 +196,15 @@ def ekf_run(seed: int, seconds: float, calibration: OdometryCalibration,
 
 
 def ekf_monte_carlo(runs: int, seconds: float, calibration: OdometryCalibration | None = None,
-                    processes: int = 1, fix_every: float = 10.0) -> MonteCarloResult:
+                    processes: int = 1, fix_every: float = 10.0,
+                    fixes: str = "truth") -> MonteCarloResult:
     """Seeds ``0 .. runs - 1``, each :func:`ekf_run`; ``processes > 1`` runs them in parallel."""
     if not (isinstance(runs, int) and runs >= 1):
         raise ValueError(f"runs must be an integer >= 1, got {runs!r}")
     if not (math.isfinite(seconds) and seconds > 0):
         raise ValueError(f"seconds must be a finite number > 0, got {seconds!r}")
     calibration = calibration or calibrate_worn_chair()
-    args = [(seed, seconds, calibration, fix_every) for seed in range(runs)]
+    args = [(seed, seconds, calibration, fix_every, fixes) for seed in range(runs)]
     if processes > 1:
         with ProcessPoolExecutor(processes) as pool:
             results = list(pool.map(ekf_run, *zip(*args)))

@@ -107,9 +107,11 @@ class SimBase(BodyMixin):
                                              p.depth_scan.vertical_fov_deg)
         self._camera_rng = rngs[6]
         self._image: CameraImage | None = None
-        self._sign_targets = tuple(  # the world's signs, as the camera draws them
+        self._sign_targets = tuple(  # the world's signs and markers, as the camera draws them
             PlanarTarget(sign.name, house_sign(sign.word), sign.width, sign.centre, sign.facing)
-            for sign in self.world.signs)
+            for sign in self.world.signs) + tuple(
+            PlanarTarget(f"marker {m.marker_id}", m.image(), m.width, m.centre, m.facing)
+            for m in self.world.markers)
         self._build_space(self._start_pose(start), people)
         # what each sensor can see of the walls and objects from its height (static)
         w = self.world

@@ -13,7 +13,9 @@ A world file (``data/worlds/<name>.json``) holds::
       "objects": [{"name": "table top", "outline": [[x, y], ...],
                    "z": [0.70, 0.75]}],            # optional
       "signs": [{"name": "exit", "word": "EXIT", "at": [x, y, z],
-                 "facing": theta, "width": 0.6}]   # optional
+                 "facing": theta, "width": 0.6}],  # optional
+      "markers": [{"id": 3, "at": [x, y, z], "facing": theta,
+                   "side": 0.3}]                   # optional
     }
 
 Every wall polyline becomes straight segments; a closed shape repeats its first point.
@@ -26,7 +28,9 @@ a ``tag`` on their back, a :class:`~abcwc.perception.tags.FollowCard` (an ArUco 
 and a QR code of ``text``, each ``side`` m across) that the chair's camera sees. A sign
 is a house-style door sign (:func:`~abcwc.perception.signs.house_sign`) saying ``word``,
 ``width`` m wide, hung flat with its centre ``at`` (m) and its face turned to ``facing``
-(rad: the heading of the way it faces).
+(rad: the heading of the way it faces). A marker is a fixed ArUco marker
+(:class:`~abcwc.perception.markers.FixedMarker`) at a surveyed place, hung the same way:
+the landmarks the chair's filter takes fixes from.
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from abcwc.paths import data_dir, read_document
+from abcwc.perception.markers import FixedMarker
 from abcwc.perception.signs import house_sign
 from abcwc.perception.tags import FollowCard
 from abcwc.types import Pose2D
@@ -87,6 +92,7 @@ class World:
     people: tuple[PersonSpec, ...] = ()
     description: str = ""
     signs: tuple[SignSpec, ...] = ()
+    markers: tuple[FixedMarker, ...] = ()
     source: Path | None = field(default=None, compare=False)
     bands: np.ndarray | None = field(default=None, compare=False)
 
@@ -133,11 +139,11 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
             f"{label}: missing {', '.join(sorted(missing))} (need name, walls, places)"
         )
     unknown = raw.keys() - {"name", "walls", "places", "people", "objects", "signs",
-                            "description"}
+                            "markers", "description"}
     if unknown:
         raise WorldError(
             f"{label}: unknown key(s) {', '.join(sorted(unknown))}; "
-            "allowed: name, description, walls, places, people, objects, signs"
+            "allowed: name, description, walls, places, people, objects, signs, markers"
         )
     if not isinstance(raw["walls"], list) or not raw["walls"]:
         raise WorldError(f"{label}: walls must be a non-empty list of polylines")
@@ -207,6 +213,7 @@ def world_from_dict(raw: dict, source: Path | None = None) -> World:
         bands=np.array(bands, dtype=float),
         signs=tuple(_sign(sign, f"{label}: signs[{i}]")
                     for i, sign in enumerate(_list(raw.get("signs", []), f"{label}: signs"))),
+        markers=_markers(_list(raw.get("markers", []), f"{label}: markers"), label),
     )
 
 
@@ -216,12 +223,9 @@ def _list(raw: object, where: str) -> list:
     return raw
 
 
-def _sign(raw: object, where: str) -> SignSpec:
-    """A ``signs`` entry as a SignSpec."""
-    if not isinstance(raw, dict) or not {"name", "word", "at", "facing"} <= raw.keys():
-        raise WorldError(f"{where} must be an object with name, word, at [x, y, z] (m), "
-                         "facing (rad) and optionally width (m)")
-    at, facing, width = raw["at"], raw["facing"], raw.get("width", 0.6)
+def _hung(raw: dict, where: str) -> tuple[tuple[float, float, float], float]:
+    """A sign's or marker's ``at`` [x, y, z] (m) and ``facing`` (rad), checked."""
+    at, facing = raw["at"], raw["facing"]
     if (not isinstance(at, list) or len(at) != 3
             or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in at)
             or not 0 < at[2] < WALL_HEIGHT):
@@ -229,6 +233,37 @@ def _sign(raw: object, where: str) -> SignSpec:
                          f"got {at!r}")
     if not (isinstance(facing, (int, float)) and math.isfinite(facing)):
         raise WorldError(f"{where}.facing must be a finite heading in rad, got {facing!r}")
+    return (float(at[0]), float(at[1]), float(at[2])), float(facing)
+
+
+def _markers(raw: list, label: str) -> tuple[FixedMarker, ...]:
+    """The ``markers`` entries as FixedMarkers, each id once."""
+    markers = []
+    for i, entry in enumerate(raw):
+        where = f"{label}: markers[{i}]"
+        if not isinstance(entry, dict) or not {"id", "at", "facing"} <= entry.keys():
+            raise WorldError(f"{where} must be an object with id, at [x, y, z] (m), facing "
+                             "(rad) and optionally side (m)")
+        centre, facing = _hung(entry, where)
+        try:
+            markers.append(FixedMarker(entry["id"], centre, facing,
+                                       float(entry.get("side", 0.3))))
+        except (TypeError, ValueError) as error:
+            raise WorldError(f"{where}: {error}") from None
+    ids = [m.marker_id for m in markers]
+    if len(set(ids)) != len(ids):
+        raise WorldError(f"{label}: markers: each id once (a sighting must name one place), "
+                         f"got {sorted(ids)}")
+    return tuple(markers)
+
+
+def _sign(raw: object, where: str) -> SignSpec:
+    """A ``signs`` entry as a SignSpec."""
+    if not isinstance(raw, dict) or not {"name", "word", "at", "facing"} <= raw.keys():
+        raise WorldError(f"{where} must be an object with name, word, at [x, y, z] (m), "
+                         "facing (rad) and optionally width (m)")
+    centre, facing = _hung(raw, where)
+    width = raw.get("width", 0.6)
     if not (isinstance(width, (int, float)) and 0.05 <= width <= 3):
         raise WorldError(f"{where}.width must be 0.05..3 m, got {width!r}")
     word = raw["word"]
@@ -236,7 +271,7 @@ def _sign(raw: object, where: str) -> SignSpec:
         house_sign(word)
     except ValueError as error:
         raise WorldError(f"{where}.word: {error}") from None
-    return SignSpec(str(raw["name"]), word, tuple(map(float, at)), float(facing), float(width))
+    return SignSpec(str(raw["name"]), word, centre, facing, float(width))
 
 
 def _tag(raw: object, where: str) -> FollowCard | None:

@@ -8,7 +8,7 @@ from abcwc.checks import NOT_YET, PASS
 def not_written(*args, **kwargs):
     """An exercise as the student notebook hands it out."""
     # YOUR CODE HERE
-    raise NotImplementedError("exercise: replace these lines with your code")
+    raise NotImplementedError("not_written: replace these lines with your code")
 
 
 def assert_pass(result, capsys) -> None:

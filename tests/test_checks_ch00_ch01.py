@@ -1,7 +1,8 @@
 """The exercise checks of chapters 00 (tour) and 01 (joystick to wheels).
 
-Each check must pass with the library's (or a correct) implementation and report
-"not yet", without raising, for a wrong answer and for an unwritten exercise.
+Each check must pass a correct answer written here, independently of the library, and
+report "not yet", without raising, for wrong answers, for an unwritten exercise and for
+the library's own function handed in.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from abcwc.types import PotCommand
 
 def not_written(*args, **kwargs):
     # YOUR CODE HERE
-    raise NotImplementedError("exercise: replace these lines with your code")
+    raise NotImplementedError("not_written: replace these lines with your code")
 
 
 def run(check, fn, capsys):
@@ -49,9 +50,10 @@ def assert_not_yet(check, fn, capsys, *fragments: str) -> str:
 
 
 def test_counts_per_wheel_turn(capsys):
-    line = assert_pass(ch00.counts_per_wheel_turn, ch00.reference_counts_per_wheel_turn, capsys)
+    line = assert_pass(ch00.counts_per_wheel_turn, lambda dw, de, n: n * dw / de, capsys)
     assert "1258.06" in line
-    assert_pass(ch00.counts_per_wheel_turn, lambda dw, de, n: n * dw / de, capsys)
+    assert_not_yet(ch00.counts_per_wheel_turn, ch00.reference_counts_per_wheel_turn, capsys,
+                   "abcwc's own")
     assert_not_yet(ch00.counts_per_wheel_turn, lambda dw, de, n: n * de / dw, capsys,
                    "upside down")
     assert_not_yet(ch00.counts_per_wheel_turn, lambda dw, de, n: 1258, capsys, "expected 1258.06")
@@ -59,8 +61,8 @@ def test_counts_per_wheel_turn(capsys):
 
 
 def test_encoder_counts_to_distance(capsys):
-    assert_pass(ch00.encoder_counts_to_distance, ch00.reference_encoder_counts_to_distance,
-                capsys)
+    assert_not_yet(ch00.encoder_counts_to_distance, ch00.reference_encoder_counts_to_distance,
+                   capsys, "abcwc's own")
     assert_pass(ch00.encoder_counts_to_distance,
                 lambda n, per_turn, d: np.asarray(n) * math.pi * d / per_turn, capsys)
     assert_not_yet(ch00.encoder_counts_to_distance,
@@ -71,7 +73,12 @@ def test_encoder_counts_to_distance(capsys):
 
 
 def test_distance_ahead(capsys):
-    assert_pass(ch00.distance_ahead, ch00.reference_distance_ahead, capsys)
+    def distance_ahead(frame, params):  # nothing seen reads as the sonar's maximum range
+        seen = frame.sonar < params.sonar.max_range
+        return frame.sonar + params.sonar.mount[0] if seen else float("inf")
+
+    assert_pass(ch00.distance_ahead, distance_ahead, capsys)
+    assert_not_yet(ch00.distance_ahead, ch00.reference_distance_ahead, capsys, "abcwc's own")
     assert_not_yet(ch00.distance_ahead, lambda frame, params: frame.sonar, capsys,
                    "2.605", "3.005")
     assert_not_yet(ch00.distance_ahead,
@@ -84,9 +91,9 @@ def test_distance_ahead(capsys):
 
 
 def test_pot_mapping(capsys):
-    line = assert_pass(ch01.pot_mapping, joystick_to_pot_byte, capsys)
+    line = assert_pass(ch01.pot_mapping, lambda v: int((v - 100) * 0.85), capsys)
     assert "289" in line
-    assert_pass(ch01.pot_mapping, lambda v: int((v - 100) * 0.85), capsys)
+    assert_not_yet(ch01.pot_mapping, joystick_to_pot_byte, capsys, "abcwc's own")
     assert_not_yet(ch01.pot_mapping, lambda v: round((v - 100) * 0.85), capsys,
                    "254 gave 131", "truncates")
     assert_not_yet(ch01.pot_mapping, lambda v: (v - 100) * 0.85, capsys, "int(")
@@ -96,7 +103,13 @@ def test_pot_mapping(capsys):
 
 
 def test_table_6(capsys):
-    assert_pass(ch01.table_6, direction_pot_command, capsys)
+    def table_6(direction):  # eqn 1 of the joystick's ends: 398 -> 253, 110 -> 8
+        fb, lr = {"forward": (253, 128), "reverse": (8, 128), "left": (128, 8),
+                  "right": (128, 253), "stop": (128, 128)}[direction]
+        return PotCommand(fb, lr)
+
+    assert_pass(ch01.table_6, table_6, capsys)
+    assert_not_yet(ch01.table_6, direction_pot_command, capsys, "abcwc's own")
 
     def as_printed(direction):
         table = {"left": PotCommand(128, 253), "right": PotCommand(128, 8)}
@@ -109,15 +122,33 @@ def test_table_6(capsys):
 
 
 def test_square_sequence(capsys):
-    line = assert_pass(ch01.square_sequence, ch01.reference_square_sequence, capsys)
-    assert "fb 168" in line and "lr 64" in line
+    def square(t):  # A.3: 5 s forward and 2 s left three times, then 2.5 s forward
+        if not 0.0 <= t < 23.5:
+            return PotCommand(128, 128)
+        return PotCommand(168, 128) if t % 7.0 < 5.0 else PotCommand(128, 64)
 
-    def other_bytes(t):  # a faster square is fine
+    line = assert_pass(ch01.square_sequence, square, capsys)
+    assert "fb 168" in line and "lr 64" in line
+    assert_not_yet(ch01.square_sequence, ch01.reference_square_sequence, capsys, "abcwc's own")
+
+    def other_bytes(t):  # a faster square is fine, within what a seated person can take
         phase = ch01.square_phase(t)
-        return {"forward": PotCommand(200, 128), "left": PotCommand(128, 40)}.get(
+        return {"forward": PotCommand(200, 128), "left": PotCommand(128, 70)}.get(
             phase, PotCommand(128, 128))
 
     assert_pass(ch01.square_sequence, other_bytes, capsys)
+
+    def full_deflection(t):  # table 6's full forward and full left: 6 km/h, 88 deg/s
+        phase = ch01.square_phase(t)
+        return {"forward": PotCommand(253, 128), "left": PotCommand(128, 8)}.get(
+            phase, PotCommand(128, 128))
+
+    assert_not_yet(ch01.square_sequence, full_deflection, capsys, "1.67 m/s", "fb 203")
+
+    def full_turn(t):
+        return PotCommand(128, 8) if ch01.square_phase(t) == "left" else square(t)
+
+    assert_not_yet(ch01.square_sequence, full_turn, capsys, "rad/s", "lr 64")
 
     def turns_right(t):
         if ch01.square_phase(t) == "left":

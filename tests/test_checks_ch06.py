@@ -34,9 +34,9 @@ def modular_travel(ticks, distance_per_count, bits=32):
     return deltas * distance_per_count
 
 
-@pytest.mark.parametrize("fn", [ch06.reference_wheel_travel, modular_travel])
-def test_wheel_travel_passes(fn, capsys):
-    assert_pass(ch06.wheel_travel_check(fn), capsys)
+def test_wheel_travel_passes(capsys):
+    assert_pass(ch06.wheel_travel_check(modular_travel), capsys)
+    assert_not_yet(ch06.wheel_travel_check(ch06.reference_wheel_travel), capsys, "abcwc's own")
 
 
 def test_wheel_travel_without_the_wrap_is_not_yet(capsys):
@@ -66,9 +66,9 @@ def eqns_6_to_10(pose, d_left, d_right, wheel_base):
     return (pose.x + d_c * math.cos(pose.theta), pose.y + d_c * math.sin(pose.theta), theta)
 
 
-@pytest.mark.parametrize("fn", [ch06.reference_odometry_step, eqns_6_to_10])
-def test_odometry_step_passes(fn, capsys):
-    assert_pass(ch06.odometry_step_check(fn), capsys)
+def test_odometry_step_passes(capsys):
+    assert_pass(ch06.odometry_step_check(eqns_6_to_10), capsys)
+    assert_not_yet(ch06.odometry_step_check(ch06.reference_odometry_step), capsys, "abcwc's own")
 
 
 def test_odometry_step_like_a9_is_not_yet(capsys):
@@ -121,9 +121,9 @@ def arcs_step_by_step(d_left, d_right, wheel_base, start):
     return np.array([p.as_array() for p in poses])
 
 
-@pytest.mark.parametrize("fn", [ch06.reference_integrate_arcs, arcs_step_by_step])
-def test_integrate_arcs_passes(fn, capsys):
-    assert_pass(ch06.integrate_arcs_check(fn), capsys)
+def test_integrate_arcs_passes(capsys):
+    assert_pass(ch06.integrate_arcs_check(arcs_step_by_step), capsys)
+    assert_not_yet(ch06.integrate_arcs_check(ch06.reference_integrate_arcs), capsys, "abcwc's own")
 
 
 @pytest.mark.parametrize("method, fragment", [("euler", "heading before its step"),

@@ -26,9 +26,10 @@ def numpy_bearing(pose, goal):
     return np.linalg.norm(d), alpha
 
 
-@pytest.mark.parametrize("fn", [landmark.distance_and_bearing, numpy_bearing])
-def test_bearing_passes_eqns_11_12(fn, capsys):
-    assert_pass(ch07.distance_and_bearing_check(fn), capsys)
+def test_bearing_passes_eqns_11_12(capsys):
+    assert_pass(ch07.distance_and_bearing_check(numpy_bearing), capsys)
+    assert_not_yet(ch07.distance_and_bearing_check(landmark.distance_and_bearing), capsys,
+                   "abcwc's own")
 
 
 def test_bearing_hand_worked_values():
@@ -97,9 +98,10 @@ def student_machine(state, rho, alpha, tolerance=0.5, heading_tolerance=0.3,
     return "turn", Twist(0.0, turn_rate if alpha > 0 else -turn_rate)
 
 
-@pytest.mark.parametrize("fn", [landmark.turn_then_drive, student_machine])
-def test_machine_passes(fn, capsys):
-    assert_pass(ch07.turn_then_drive_check(fn), capsys)
+def test_machine_passes(capsys):
+    assert_pass(ch07.turn_then_drive_check(student_machine), capsys)
+    assert_not_yet(ch07.turn_then_drive_check(landmark.turn_then_drive), capsys,
+                   "abcwc's own")
 
 
 def test_machine_hand_worked_values():
@@ -161,9 +163,10 @@ def student_law(rho, alpha, k_rho=0.8, k_alpha=1.5, max_speed=0.8, max_turn_rate
     return Twist(v * np.cos(alpha) if np.cos(alpha) > 0 else 0.0, w)
 
 
-@pytest.mark.parametrize("fn", [landmark.proportional_command, student_law])
-def test_law_passes(fn, capsys):
-    assert_pass(ch07.proportional_command_check(fn), capsys)
+def test_law_passes(capsys):
+    assert_pass(ch07.proportional_command_check(student_law), capsys)
+    assert_not_yet(ch07.proportional_command_check(landmark.proportional_command), capsys,
+                   "abcwc's own")
 
 
 def test_law_hand_worked_values():

@@ -45,11 +45,12 @@ def student_factors(alpha, radius, wheel_base):
 # --- exercise 1: centres of gravity and E_max,syst ----------------------------------------
 
 
-@pytest.mark.parametrize("fn", [ch08.reference_centres_of_gravity_and_emax, student_centres])
-def test_centres_passes(fn, capsys):
-    result = ch08.centres_check(fn)
+def test_centres_passes(capsys):
+    result = ch08.centres_check(student_centres)
     assert_pass(result, capsys)
     assert "0.2184 m" in result.line  # figure 51's numbers, A.16's emax
+    assert_not_yet(ch08.centres_check(ch08.reference_centres_of_gravity_and_emax), capsys,
+                   "abcwc's own")
 
 
 def test_the_thesis_centres_by_hand():
@@ -100,9 +101,10 @@ def test_centres_not_written(capsys):
 # --- exercise 2: alpha, beta, R -----------------------------------------------------------
 
 
-@pytest.mark.parametrize("fn", [ch08.reference_alpha_beta_radius, student_alpha_beta])
-def test_alpha_beta_passes(fn, capsys):
-    assert_pass(ch08.alpha_beta_radius_check(fn), capsys)
+def test_alpha_beta_passes(capsys):
+    assert_pass(ch08.alpha_beta_radius_check(student_alpha_beta), capsys)
+    assert_not_yet(ch08.alpha_beta_radius_check(ch08.reference_alpha_beta_radius), capsys,
+                   "abcwc's own")
 
 
 def test_worked_example_by_hand():
@@ -146,11 +148,12 @@ def test_alpha_beta_not_written(capsys):
 # --- exercise 3: E_b, E_d and the correction factors --------------------------------------
 
 
-@pytest.mark.parametrize("fn", [ch08.reference_correction_factors, student_factors])
-def test_correction_factors_pass(fn, capsys):
-    result = ch08.correction_factors_check(fn)
+def test_correction_factors_pass(capsys):
+    result = ch08.correction_factors_check(student_factors)
     assert_pass(result, capsys)
     assert "E_b 1.0300, E_d 1.0100" in result.line  # the worked example comes back
+    assert_not_yet(ch08.correction_factors_check(ch08.reference_correction_factors), capsys,
+                   "abcwc's own")
 
 
 def test_correction_factors_with_the_nominal_wheel_base_is_not_yet(capsys):

@@ -35,8 +35,8 @@ def student_jacobian(s, dt):
 
 def test_motion_check_passes_the_unicycle(capsys):
     assert_pass(ch10.motion_check(student_motion, student_jacobian), capsys)
-    assert_pass(ch10.motion_check(ch10.reference_motion, ch10.reference_motion_jacobian),
-                capsys)
+    assert_not_yet(ch10.motion_check(ch10.reference_motion, ch10.reference_motion_jacobian),
+                   capsys, "abcwc's own")
 
 
 def test_motion_with_sin_and_cos_swapped_is_not_yet(capsys):
@@ -87,9 +87,9 @@ def textbook_update(x, P, z, H, R):
     return x + K @ (z - H @ x), (np.eye(len(x)) - K @ H) @ P
 
 
-def test_kalman_update_passes_the_textbook_and_the_library(capsys):
+def test_kalman_update_passes_the_textbook_and_refuses_the_library(capsys):
     assert_pass(ch10.kalman_update_check(textbook_update), capsys)
-    assert_pass(ch10.kalman_update_check(ch10.reference_kalman_update), capsys)
+    assert_not_yet(ch10.kalman_update_check(ch10.reference_kalman_update), capsys, "abcwc's own")
 
 
 def test_kalman_update_without_the_inverse_is_not_yet(capsys):
@@ -137,7 +137,7 @@ def student_nees(truth, estimate, P):
 
 def test_nees_passes_a_wrapped_solve(capsys):
     assert_pass(ch10.nees_check(student_nees), capsys)
-    assert_pass(ch10.nees_check(ch10.reference_nees_sample), capsys)
+    assert_not_yet(ch10.nees_check(ch10.reference_nees_sample), capsys, "abcwc's own")
 
 
 def test_nees_without_wrapping_is_not_yet(capsys):

@@ -33,7 +33,7 @@ def right(joystick: int) -> int:
 
 def not_written(joystick: int) -> int:
     # YOUR CODE HERE
-    raise NotImplementedError("pot_from_joystick: replace these lines with your code")
+    raise NotImplementedError("not_written: replace these lines with your code")
 
 
 def library_pot(joystick: int) -> int:
@@ -227,3 +227,23 @@ def test_format_value_is_short_and_deterministic():
 def test_package_reexports_the_api():
     assert set(checks.__all__) <= set(dir(checks))
     assert checks.check is check and checks.PASS == "✔ pass" and checks.NOT_YET == "… not yet"
+
+
+def test_a_stub_of_an_earlier_exercise_is_named(capsys):
+    """Exercise 2 calls exercise 1, still a stub: the check names exercise 1 instead of
+    saying that the cell above (exercise 2, which is written) is not."""
+
+    def pot_from_joystick(joystick: int) -> int:
+        raise NotImplementedError("pot_from_joystick: replace these lines with your code")
+
+    def speed_command(joystick: int) -> int:  # exercise 2, written, calling exercise 1
+        return pot_from_joystick(joystick) + 1
+
+    result = check("speed", pot_mapping, speed_command)
+    assert not result
+    assert capsys.readouterr().out == (
+        "… not yet — speed: not written yet: this exercise calls pot_from_joystick(), an "
+        "earlier exercise that still raises NotImplementedError; write pot_from_joystick "
+        "first\n")
+    check("pot mapping", pot_mapping, pot_from_joystick)  # its own check: the cell above
+    assert "the cell above still raises" in capsys.readouterr().out

@@ -14,12 +14,15 @@ functions fall back on :mod:`abcwc.control`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 
 from abcwc.checks.report import checker, expect, expect_equal, format_value
 from abcwc.control import direction_pot_command, joystick_to_pot_byte
+from abcwc.control.pots import pot_byte_to_deflection
+from abcwc.control.safety import ComfortLimits
 from abcwc.params import default_params
 from abcwc.types import PotCommand
 
@@ -138,9 +141,13 @@ def _standing(byte: int) -> bool:
 def square_sequence(fn: Callable[[float], PotCommand]) -> str:
     """Check A.3's timing and directions at times inside every phase and after it.
 
-    The bytes are the student's choice: forward needs FB above the dead band (131..253)
-    with LR neutral; left needs LR below it (8..125) with FB neutral (128 +- 2); every
-    forward phase must send the same bytes, and so must every turn.
+    The bytes are the student's choice: forward needs FB above the dead band with LR
+    neutral; left needs LR below it with FB neutral (128 +- 2); every forward phase must
+    send the same bytes, and so must every turn. And someone sits in the chair: forward
+    at most the safety filter's comfort speed and the turn at most its comfort turn
+    rate (:class:`abcwc.control.safety.ComfortLimits`: 1.0 m/s and 0.8 rad/s), read
+    through the motor controller's model (:func:`abcwc.control.pot_byte_to_deflection`
+    times the chair's full-deflection speed and turn rate).
     """
     p = default_params()
     seen: dict[str, tuple[int, int]] = {}
@@ -159,6 +166,11 @@ def square_sequence(fn: Callable[[float], PotCommand]) -> str:
             f"stop after {SQUARE_DURATION:g} s")
 
 
+def _largest_byte(deflection: float, p: object) -> int:
+    """The largest pot byte above 128 whose deflection is at most ``deflection``."""
+    return max(b for b in range(129, 254) if pot_byte_to_deflection(b, p) <= deflection + 1e-12)
+
+
 def _check_sample(fn: Callable[[float], PotCommand], t: float, phase: str, where: str,
                   seen: dict[str, tuple[int, int]], p: object) -> None:
     got = fn(t)
@@ -167,13 +179,26 @@ def _check_sample(fn: Callable[[float], PotCommand], t: float, phase: str, where
                              "PotCommand(fb, lr)")
     fb, lr = pair
     said = f"t = {t:.2f} s ({where}) gave (fb {fb}, lr {lr})"
+    limits = ComfortLimits()
     if phase == "forward":
         expect(fb > 130 and _standing(lr),
                f"{said}; forward needs fb above 130 (past the dead band) and lr 128")
+        speed = pot_byte_to_deflection(fb, p) * p.max_speed
+        fastest = _largest_byte(limits.max_speed / p.max_speed, p)
+        expect(speed <= limits.max_speed + 1e-9,
+               f"{said}: that is {speed:.2f} m/s ({speed * 3.6:.1f} km/h) with a person in "
+               f"the seat; keep forward at or below {limits.max_speed:g} m/s, the comfort "
+               f"limit the safety filter holds (fb {fastest} at most)")
     elif phase == "left":
         expect(lr < 126 and _standing(fb),
                f"{said}; a left turn on the spot needs lr below 126 and fb 128 "
                "(LR below 128 turns left, eqn 2)")
+        rate = -pot_byte_to_deflection(lr, p) * p.max_turn_rate
+        expect(rate <= limits.max_turn_rate + 1e-9,
+               f"{said}: that turns at {rate:.2f} rad/s ({math.degrees(rate):.0f} deg/s) with "
+               f"a person in the seat; keep it at or below {limits.max_turn_rate:g} rad/s, "
+               f"the safety filter's comfort limit (lr "
+               f"{256 - _largest_byte(limits.max_turn_rate / p.max_turn_rate, p)} at least)")
     else:
         expect(_standing(fb) and _standing(lr), f"{said}; the chair should stop: (128, 128)")
     if phase in seen:

@@ -110,6 +110,8 @@ def check(
 
     ``fn`` passes by returning (a short message such as ``"all 7 values match"``, or
     ``None`` for ``"ok"``) and fails by raising :class:`NotYet` with what was wrong.
+    A function of abcwc's own handed in (the library's, or a check's ``reference_*``)
+    is refused before ``fn`` runs: ``that is abcwc's own <name>: write yours``.
     ``NotImplementedError`` means the exercise is not written yet; any other exception
     is reported as raised by the student's code, without a traceback.
     ``KeyboardInterrupt`` and ``SystemExit`` are not caught.
@@ -123,11 +125,14 @@ def check(
         result = check("wheel distance", compare, wheel_distance)
     """
     try:
+        for handed in (*args, *kwargs.values()):  # a check judges the student's own code
+            if callable(handed):
+                expect_own(handed)
         message = fn(*args, **kwargs)
     except NotYet as exc:
         result = CheckResult(name, False, _one_line(str(exc)) or "wrong answer")
-    except NotImplementedError:
-        result = CheckResult(name, False, NOT_WRITTEN)
+    except NotImplementedError as exc:
+        result = CheckResult(name, False, _not_written(exc, args))
     except Exception as exc:  # noqa: BLE001 - student code may raise anything
         detail = _one_line(str(exc))
         raised = type(exc).__name__ + (f": {detail}" if detail else "")
@@ -136,6 +141,20 @@ def check(
         result = CheckResult(name, True, _one_line(message) if message else "ok")
     print(result.line)
     return result
+
+
+def _not_written(exc: NotImplementedError, args: tuple) -> str:
+    """What to say when a stub raised: :data:`NOT_WRITTEN` when it is the exercise being
+    checked, else which other exercise's stub it called (``course build`` writes each
+    stub's message as ``"<function>: replace these lines with your code"``)."""
+    stub = str(exc).partition(": replace these lines")[0]
+    if not stub or stub == str(exc):
+        return NOT_WRITTEN
+    checked = {getattr(a, "__name__", None) for a in args if callable(a)} - {None}
+    if not checked or stub in checked:
+        return NOT_WRITTEN
+    return (f"not written yet: this exercise calls {stub}(), an earlier exercise that still "
+            f"raises NotImplementedError; write {stub} first")
 
 
 def checker(name: str) -> Callable[[Callable[P, str | None]], Callable[P, CheckResult]]:

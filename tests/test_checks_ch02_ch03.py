@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from abcwc.checks import ch02, ch03
@@ -155,19 +156,65 @@ def test_turn_angle_not_written(capsys):
 # --- chapter 03: wandering the lab -------------------------------------------------------
 
 
+class BounceWanderer:
+    """Written here, not the chapter's recipe: drive on; near something in front, turn on
+    the spot to the side the IR ring says is emptier until the front is clear; very
+    near, back away first."""
+
+    def __init__(self):
+        self.turn = 0.0
+        self.back_until = -1.0
+
+    def __call__(self, frame):
+        ir = np.nan_to_num(np.asarray(frame.ir, float), nan=1.5, posinf=1.5, neginf=0.0)
+        front = min(frame.sonar, ir[0], ir[1] + 0.1, ir[5] + 0.1)
+        if front < 0.35 and frame.t > self.back_until:
+            self.back_until = frame.t + 0.8
+        if frame.t < self.back_until:
+            return Twist(-0.2, 0.0)
+        if front < 0.9:
+            if not self.turn:
+                self.turn = 0.7 if ir[1] + ir[2] > ir[4] + ir[5] else -0.7
+            return Twist(0.0, self.turn)
+        self.turn = 0.0
+        return Twist(0.45, 0.0)
+
+
+def test_wander_passes_a_design_of_its_own(capsys):
+    assert_pass(ch03.wander_check(BounceWanderer), capsys)
+
+
 def test_wander_refuses_the_library_avoider_handed_in(capsys):
     assert_not_yet(ch03.wander_check(SonarAvoider), capsys, "abcwc's own")
 
 
 def test_wander_accepts_a_factory_or_a_controller(capsys):
-    assert_pass(ch03.wander_check(lambda: SonarAvoider()), capsys)
+    assert_pass(ch03.wander_check(lambda: BounceWanderer()), capsys)
     # a controller object itself (a callable taking a frame) is used as it is
     assert ch03._make_controller(lambda frame: None) is not None
+
+
+def test_wander_refuses_a_sensor_blind_circle(capsys):
+    """Issue reproduction: Twist(0.35, 1.0) used to pass (42 m, no contact in the lab)."""
+    result = ch03.wander_check(lambda frame: Twist(0.35, 1.0))
+    assert_not_yet(result, capsys, "round in circles", "only 3 different square metres")
 
 
 def test_wander_straight_ahead_collides(capsys):
     result = ch03.wander_check(lambda frame: Twist(0.8, 0.0))
     assert_not_yet(result, capsys, "touched something")
+
+
+def plain_rule(frame):
+    """Table 7 on the sonar, always turning right, at walking pace (0.6 / 0.3 m/s)."""
+    angle = ch03.table7_turn_angle(frame.sonar)
+    if not angle:
+        return Twist(0.6, 0.0)
+    return Twist(0.3, -math.radians(angle))
+
+
+def test_wander_refuses_the_thesis_rule_turning_always_right(capsys):
+    assert_not_yet(ch03.wander_check(lambda: plain_rule), capsys, "touched something")
 
 
 def test_wander_standing_still_is_not_yet(capsys):

@@ -183,3 +183,22 @@ def test_run_square_without_ground_truth_gives_nan():
     assert math.hypot(run.odometric_end.x, run.odometric_end.y) < 0.02
     with pytest.raises(ValueError, match="ground truth"):
         drive_square(body, "ccw", side=1.0)
+
+
+def test_a_wheel_mismatch_can_hide_a_wheel_base_error_one_way_round():
+    """The E_d whose legs curve by each turn's shortfall: by hand, alpha = pi/2 (1 - 1/1.03)
+    = 0.04575 rad, R = 1.75 / sin(alpha / 2) = 76.51 m, E_d = (R + 0.2266) / (R - 0.2266)
+    = 1.00594 for L = 3.5 m and b = 0.44 m; the model's CCW square then closes, the CW one
+    does not."""
+    from abcwc.estimation import cancelling_wheel_ratio, model_return_error
+
+    e_d = cancelling_wheel_ratio(1.03, 3.5, 0.44)
+    alpha = math.pi / 2 * (1 - 1 / 1.03)
+    radius = 1.75 / math.sin(alpha / 2)
+    assert e_d == pytest.approx((radius + 1.03 * 0.22) / (radius - 1.03 * 0.22))
+    assert e_d == pytest.approx(1.00594, abs=1e-5)
+    ccw = model_return_error(3.5, 0.44, e_d, 1.03, "ccw")
+    cw = model_return_error(3.5, 0.44, e_d, 1.03, "cw")
+    assert math.hypot(*ccw) < 0.01 < math.hypot(*cw)
+    with pytest.raises(ValueError, match="e_b"):
+        cancelling_wheel_ratio(-1.0, 3.5, 0.44)

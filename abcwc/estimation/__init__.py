@@ -38,6 +38,7 @@ from abcwc.estimation.odometry import (
 from abcwc.estimation.umbmark import (
     UmbmarkResult,
     alpha_beta,
+    cancelling_wheel_ratio,
     centres_of_gravity,
     curve_radius,
     e_max_syst,
@@ -61,6 +62,7 @@ __all__ = [
     "integrate_gyro_heading", "integrate_odometry",
     "load_thesis_trials", "model_return_error", "nees", "nees_band", "noise_from_models",
     "odometry_from_log", "odometry_step", "run_ekf", "trial_covariance",
-    "umbmark_corrections", "validate_log", "wheel_base_ratio", "wheel_travel",
+    "cancelling_wheel_ratio", "umbmark_corrections", "validate_log", "wheel_base_ratio",
+    "wheel_travel",
     "wheel_correction_factors", "wheel_diameter_ratio", "wrap_tick_delta",
 ]

@@ -234,6 +234,20 @@ def umbmark_corrections(
     )
 
 
+def cancelling_wheel_ratio(e_b: float, side: float, wheel_base: float) -> float:
+    """The ``E_d`` whose curved legs give back, on a counter-clockwise square of ``side``
+    m, exactly what each turn loses to a wheel base ``E_b`` times the nominal
+    ``wheel_base`` (m): ``beta = alpha``, so the two type-A and type-B errors cancel
+    going one way round and add up the other (Borenstein and Feng 1996, section 5.1: why
+    the benchmark drives both directions). ``alpha = pi/2 (1 - 1/E_b)`` is each turn's
+    shortfall, the legs' radius is eqn 5.11's for ``beta = alpha`` and ``E_d`` is eqn
+    5.12's with the actual wheel base."""
+    if not (math.isfinite(e_b) and e_b > 0):
+        raise ValueError(f"e_b must be a finite ratio > 0, got {e_b!r}")
+    alpha = math.pi / 2 * (1 - 1 / e_b)
+    return wheel_diameter_ratio(curve_radius(alpha, side), e_b * wheel_base)
+
+
 def model_return_error(side: float, wheel_base: float, e_d: float, e_b: float,
                        direction: str) -> tuple[float, float]:
     """Return error (x, y) (m) of one square by the small-angle model above.

@@ -18,7 +18,8 @@ writes ``course/NN_topic.ipynb`` from it, using nbgrader's markers:
   editable/deletable/jupyter flags; notebook metadata is just the python3 kernelspec.
   The JSON is written the way nbformat writes it, so a rebuild is byte-identical.
 
-Files in ``course/`` with no solution counterpart are removed. ``--check`` writes nothing
+``course/README.md`` is the front page (:mod:`abcwc.course_front_page`). Other files in
+``course/`` with no solution counterpart are removed. ``--check`` writes nothing
 and fails (exit code 1) when ``course/`` differs from what a build would write.
 """
 
@@ -35,6 +36,7 @@ from typing import Any
 import nbformat
 from nbformat import NotebookNode
 
+from abcwc.course_front_page import front_page
 from abcwc.paths import NotACheckoutError
 
 __all__ = [
@@ -52,6 +54,8 @@ SOLUTION = "SOLUTION"
 HIDDEN_TESTS = "HIDDEN TESTS"
 HIDDEN_TAG = "hidden"
 NOTEBOOK_NAME = re.compile(r"^\d\d_[A-Za-z0-9_-]+\.ipynb$")
+FRONT_PAGE = "README.md"
+"""The course's front page in ``course/``: every chapter, its goals and thesis sections."""
 KERNELSPEC = {"display_name": "Python 3 (ipykernel)", "language": "python", "name": "python3"}
 KEPT_CELL_METADATA = ("tags", "editable", "deletable", "jupyter")
 
@@ -328,6 +332,7 @@ def plan(
                 str(path), "chapter notebooks are named NN_topic.ipynb, e.g. 01_joystick.ipynb"
             )
         wanted[path.name] = render(path)
+    wanted[FRONT_PAGE] = front_page(source)
 
     changes = []
     for name, text in wanted.items():

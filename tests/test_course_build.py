@@ -240,9 +240,10 @@ def course_tree(tmp_path: Path) -> tuple[Path, Path]:
 
 def test_build_writes_every_chapter_and_rebuild_is_byte_identical(course_tree):
     solutions, course = course_tree
-    assert build(solutions, course) == [course / "01_one.ipynb", course / "02_two.ipynb"]
+    assert build(solutions, course) == [course / "01_one.ipynb", course / "02_two.ipynb",
+                                        course / "README.md"]
     before = {p.name: p.read_bytes() for p in course.iterdir()}
-    assert all(text.endswith(b"}\n") for text in before.values())
+    assert all(text.endswith(b"}\n") for name, text in before.items() if name.endswith("ipynb"))
     assert build(solutions, course) == []
     assert build(solutions, course, check=True) == []
     assert {p.name: p.read_bytes() for p in course.iterdir()} == before
@@ -272,6 +273,7 @@ def test_check_mode_reports_changed_missing_and_extra_files_and_writes_nothing(c
         ".ipynb_checkpoints",
         "01_one.ipynb",
         "02_two.ipynb",
+        "README.md",
     ]
     assert build(solutions, course, check=True) == []
 
@@ -306,6 +308,7 @@ def test_main_build_and_check_exit_codes_and_messages(course_tree, capsys):
     assert out == [
         f"stale: {course / '01_one.ipynb'} (missing)",
         f"stale: {course / '02_two.ipynb'} (missing)",
+        f"stale: {course / 'README.md'} (missing)",
         f"{course}/ is out of date: run `abcwc course build`",
     ]
     assert not course.exists()

@@ -50,7 +50,7 @@ def _goals(intro: str, path: Path) -> str:
     if "What you will learn" in intro:
         after = intro.split("What you will learn", 1)[1]
         goals = [" ".join(item.split()) for item in
-                 re.findall(r"^\d+\.\s+(.+?)(?=^\d+\.\s|^\s*$|^\|)", after, re.M | re.S)]
+                 re.findall(r"^\d+\.\s+(.+?)(?=^\d+\.\s|^\s*$|^\||\Z)", after, re.M | re.S)]
         if goals:
             return "<br>".join(f"{k}. {goal.rstrip(';.')}" for k, goal in enumerate(goals, 1))
     notebook = nbformat.read(path, as_version=4)

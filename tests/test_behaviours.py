@@ -161,3 +161,14 @@ def test_bad_settings_are_refused_with_what_is_allowed(make, message):
     with pytest.raises(ValueError, match=message):
         make()
 
+
+
+def test_the_freer_side_counts_too_close_as_no_room_and_clear_as_the_ir_range():
+    from abcwc.navigation.sonar_avoid import freer_side
+
+    inf = math.inf
+    # ring: 0 ahead, 1 front-left, 2 back-left, 3 behind, 4 back-right, 5 front-right
+    assert freer_side([1.0, 1.2, 0.5, 1.0, 0.4, 1.2], 1.5) == 1.0  # 1.7 m left, 1.6 right
+    assert freer_side([1.0, -inf, 1.5, 1.0, 0.4, 1.0], 1.5) == 1.0  # too close: 0, not -inf
+    assert freer_side([1.0, inf, 0.1, 1.0, 0.2, 1.5], 1.5) == -1.0  # clear: 1.5, not inf
+    assert freer_side([1.0, 0.5, 0.5, 1.0, 0.5, 0.5], 1.5) == 1.0  # a tie goes left

@@ -19,6 +19,7 @@ turning right like the thesis's, and NaN sonar counts as nothing in range.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 from abcwc.behaviours.base import LOOP_RATE_HZ, BehaviourBase, positive_number
 from abcwc.control.pots import AvoidAction, angle_to_lr_byte, sonar_turn_angle
@@ -34,6 +35,16 @@ def _ir_distance(reading: float, max_range: float) -> float:
     if reading == -math.inf:
         return 0.0
     return min(reading, max_range)
+
+
+def freer_side(ir: Sequence[float], max_range: float) -> float:
+    """+1 (left) or -1 (right): the side whose two IR sensors (1 and 2 on the left, 5 and
+    4 on the right, section 2.2.5's ring) see more room, each reading taken as a distance
+    (too close: 0, clear: ``max_range``); left on a tie."""
+    left = _ir_distance(float(ir[FRONT_LEFT]), max_range) + _ir_distance(float(ir[2]), max_range)
+    right = (_ir_distance(float(ir[FRONT_RIGHT]), max_range)
+             + _ir_distance(float(ir[4]), max_range))
+    return 1.0 if left >= right else -1.0
 
 
 class SonarAvoider(BehaviourBase):
@@ -105,6 +116,4 @@ class SonarAvoider(BehaviourBase):
         return PotCommand(fb, lr)
 
     def _freer_side(self, frame: SensorFrame) -> float:
-        left = self._room(frame, FRONT_LEFT) + self._room(frame, 2)
-        right = self._room(frame, FRONT_RIGHT) + self._room(frame, 4)
-        return 1.0 if left >= right else -1.0
+        return freer_side(frame.ir, self.params.ir.max_range)

@@ -5,6 +5,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import cv2
+import numpy as np
+
 from abcwc.params import RangeSensorParams
 from abcwc.types import CameraImage
 
@@ -42,3 +45,14 @@ def kinect_camera(params: RangeSensorParams, width: int = 640) -> PinholeCamera:
     ``width`` px across (640 as the Kinect; less for speed), 4:3."""
     return PinholeCamera.from_fov(width, width * 3 // 4, params.fov_deg,
                                   params.vertical_fov_deg)
+
+
+def to_gray(image: np.ndarray | CameraImage) -> np.ndarray:
+    """A uint8 grey image from a grey or RGB uint8 array or a :class:`CameraImage`
+    (RGB to grey with OpenCV's ITU-R BT.601 weights)."""
+    pixels = image.pixels if isinstance(image, CameraImage) else np.asarray(image)
+    if pixels.dtype != np.uint8:
+        raise ValueError(f"image must be uint8, got {pixels.dtype}")
+    if pixels.ndim == 3:
+        return cv2.cvtColor(np.ascontiguousarray(pixels), cv2.COLOR_RGB2GRAY)
+    return pixels

@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from abcwc.perception.camera import to_gray
 from abcwc.types import CameraImage
 
 FLANN_INDEX_KDTREE = 1
@@ -104,14 +105,6 @@ class Detection:
     def centre(self) -> np.ndarray:
         """(2,) px: where the outline's diagonals cross (the plane's centre in view)."""
         return _diagonal_crossing(self.outline)
-
-
-def to_gray(image: np.ndarray | CameraImage) -> np.ndarray:
-    """A uint8 grey image from a grey or RGB array or a :class:`CameraImage`."""
-    pixels = image.pixels if isinstance(image, CameraImage) else np.asarray(image)
-    if pixels.ndim == 3:
-        return cv2.cvtColor(np.ascontiguousarray(pixels), cv2.COLOR_RGB2GRAY)
-    return pixels
 
 
 def make_features(kind: str = "sift", count: int = 0):

@@ -21,11 +21,10 @@ import numpy as np
 
 from abcwc.perception.camera import PinholeCamera
 from abcwc.perception.tags import (
-    ARUCO_CELLS,
-    ARUCO_QUIET_CELLS,
     MIN_POSE_SIDE_PX,
     aruco_marker_image,
     detect_aruco_markers,
+    printed_marker_width,
     square_pose,
 )
 from abcwc.types import CameraImage
@@ -54,7 +53,7 @@ class FixedMarker:
     @property
     def width(self) -> float:
         """m across the printed marker with its white quiet zone."""
-        return self.side * (ARUCO_CELLS + 2 * ARUCO_QUIET_CELLS) / ARUCO_CELLS
+        return printed_marker_width(self.side)
 
     def image(self) -> np.ndarray:
         """The printed marker, quiet zone included (grey, uint8)."""
@@ -84,9 +83,7 @@ def sight_markers(image: CameraImage, markers: dict[int, FixedMarker],
     (``min_side_px``), each with its range and bearing from the camera."""
     camera = PinholeCamera.of_image(image)
     found = []
-    for tag in detect_aruco_markers(image.pixels if image.pixels.ndim == 2
-                                    else np.dot(image.pixels, [0.299, 0.587, 0.114])
-                                    .astype(np.uint8)):
+    for tag in detect_aruco_markers(image.pixels):
         marker = markers.get(tag.marker_id)
         if marker is None or tag.side_px < min_side_px:
             continue

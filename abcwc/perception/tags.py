@@ -29,7 +29,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from abcwc.perception.camera import PinholeCamera
+from abcwc.perception.camera import PinholeCamera, to_gray
 
 ARUCO_DICTIONARY = cv2.aruco.DICT_4X4_50
 """The marker family: 4 x 4 bits (6 x 6 cells with the black border), 50 ids. The
@@ -115,6 +115,12 @@ def qr_modules(text: str) -> int:
     return (qr_code_image(text, 1).shape[0] - 2 * QR_QUIET_MODULES)
 
 
+def printed_marker_width(side: float) -> float:
+    """m across a printed ArUco marker whose black square is ``side`` m, with its quiet
+    zone (:func:`aruco_marker_image`'s layout)."""
+    return side * (ARUCO_CELLS + 2 * ARUCO_QUIET_CELLS) / ARUCO_CELLS
+
+
 def aruco_marker_image(marker_id: int, cell_px: int = 32) -> np.ndarray:
     """ArUco marker ``marker_id`` of :data:`ARUCO_DICTIONARY` (grey, uint8) with a
     one-cell white quiet zone, ``cell_px`` px per cell."""
@@ -147,7 +153,7 @@ class FollowCard:
     @property
     def marker_width(self) -> float:
         """m: the marker with its quiet zone."""
-        return self.side * (ARUCO_CELLS + 2 * ARUCO_QUIET_CELLS) / ARUCO_CELLS
+        return printed_marker_width(self.side)
 
     @property
     def qr_width(self) -> float:
@@ -185,7 +191,7 @@ def detect_qr_codes(gray: np.ndarray, upscale: int = 1) -> list[TagDetection]:
     """The QR codes in ``gray`` (uint8), decoded, corners in ``gray``'s pixels. With
     ``upscale`` 2 the image is enlarged first, which reads codes about 1.6 times
     farther away at four times the cost."""
-    image = _gray(gray)
+    image = to_gray(gray)
     if upscale > 1:
         image = cv2.resize(image, None, fx=upscale, fy=upscale,
                            interpolation=cv2.INTER_CUBIC)
@@ -200,7 +206,7 @@ def detect_qr_codes(gray: np.ndarray, upscale: int = 1) -> list[TagDetection]:
 def detect_aruco_markers(gray: np.ndarray) -> list[TagDetection]:
     """The :data:`ARUCO_DICTIONARY` markers in ``gray`` (uint8), each corner where two
     of the marker's refitted edges cross (:func:`refine_square_edges`)."""
-    image = _gray(gray)
+    image = to_gray(gray)
     parameters = cv2.aruco.DetectorParameters()
     parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_NONE
     detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(ARUCO_DICTIONARY),
@@ -330,16 +336,7 @@ def find_marker(gray: np.ndarray, marker_id: int, side: float, camera: PinholeCa
     return None
 
 
-def _gray(image: np.ndarray) -> np.ndarray:
-    image = np.asarray(image)
-    if image.dtype != np.uint8:
-        raise ValueError(f"image must be uint8, got {image.dtype}")
-    if image.ndim == 3:
-        return cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
-    return image
-
-
 __all__ = ["ARUCO_DICTIONARY", "MIN_POSE_SIDE_PX", "FollowCard", "TagDetection", "TagPose",
            "aruco_marker_image", "camera_matrix", "detect_aruco_markers", "detect_qr_codes",
-           "find_marker",
+           "find_marker", "printed_marker_width",
            "qr_code_image", "qr_modules", "refine_square_edges", "square_pose"]

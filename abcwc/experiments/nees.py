@@ -122,18 +122,28 @@ def calibrate_worn_chair(side: float = THESIS_SIDE) -> OdometryCalibration:
     return OdometryCalibration(correction, wheel_base, e_max_syst(cw, ccw) / (4 * side))
 
 
+def calibrated_filter(start: Pose2D, bias_prior: tuple[float, float],
+                      calibration: OdometryCalibration, fix_every: float = 10.0,
+                      **ekf_options: object) -> ChairEkf:
+    """The filter for a drive from ``start``: UMBmark-corrected wheels, the gyro with
+    ``bias_prior = (bias, std)`` (rad/s), and the wheels' residual spread over
+    ``fix_every`` s between fixes. ``ekf_options`` go to
+    :class:`~abcwc.estimation.ekf.ChairEkf`."""
+    return ChairEkf(start, correction=calibration.correction,
+                    wheel_base=calibration.wheel_base, gyro_bias=bias_prior[0],
+                    gyro_bias_std=bias_prior[1],
+                    noise=noise_from_models(residual_rel=calibration.residual_rel,
+                                            horizon=fix_every), **ekf_options)
+
+
 def filter_drive(log: RunLog, bias_prior: tuple[float, float],
                  calibration: OdometryCalibration, seed: int, fix_every: float = 10.0,
                  **ekf_options: object) -> tuple[np.ndarray, np.ndarray]:
-    """Filter a simulated drive from its true start: UMBmark-corrected wheels, the gyro
-    with ``bias_prior = (bias, std)`` (rad/s), and a seeded landmark fix every
-    ``fix_every`` s. ``ekf_options`` go to :class:`~abcwc.estimation.ekf.ChairEkf`.
-    Returns :func:`~abcwc.estimation.ekf.run_ekf`'s states and covariances."""
-    ekf = ChairEkf(Pose2D(*log.pose[0]), correction=calibration.correction,
-                   wheel_base=calibration.wheel_base, gyro_bias=bias_prior[0],
-                   gyro_bias_std=bias_prior[1],
-                   noise=noise_from_models(residual_rel=calibration.residual_rel,
-                                           horizon=fix_every), **ekf_options)
+    """Filter a simulated drive from its true start (:func:`calibrated_filter`) with a
+    seeded landmark fix every ``fix_every`` s. Returns
+    :func:`~abcwc.estimation.ekf.run_ekf`'s states and covariances."""
+    ekf = calibrated_filter(Pose2D(*log.pose[0]), bias_prior, calibration, fix_every,
+                            **ekf_options)
     fixes = absolute_fixes(log, fix_every, FIX_STD, seed=seed)
     return run_ekf(log, ekf, fixes, np.diag(np.square(FIX_STD)))
 
@@ -171,19 +181,15 @@ def ekf_run(seed: int, seconds: float, calibration: OdometryCalibration,
     sim = SimBase("floor", seed=seed, errors="worn", people=False,
                   camera="gray" if fixes == "markers" else None)
     bias, bias_std = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), STILL_SECONDS).gyro_z)
+    route = FollowWaypoints(floor_mixed_drive())
     if fixes == "markers":
-        log, sightings = record_with_sightings(sim, FollowWaypoints(floor_mixed_drive()),
-                                               seconds)
+        log, sightings = record_with_sightings(sim, route, seconds)
     else:
-        log = sim.run(FollowWaypoints(floor_mixed_drive()), seconds)
+        log = sim.run(route, seconds)
     if log.collisions[-1]:
         raise RuntimeError(f"seed {seed}: the route touched something; the drive is void")
     if fixes == "markers":
-        ekf = ChairEkf(Pose2D(*log.pose[0]), correction=calibration.correction,
-                       wheel_base=calibration.wheel_base, gyro_bias=bias,
-                       gyro_bias_std=bias_std,
-                       noise=noise_from_models(residual_rel=calibration.residual_rel,
-                                               horizon=fix_every))
+        ekf = calibrated_filter(Pose2D(*log.pose[0]), (bias, bias_std), calibration, fix_every)
         landmarks = {m.marker_id: m.centre[:2] for m in sim.world.markers}
         states, covs = run_ekf(log, ekf, sightings=sightings, landmarks=landmarks,
                                mount=sim.params.depth_scan.mount)

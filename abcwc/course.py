@@ -297,9 +297,11 @@ def _cell_id(cell: NotebookNode, name: str, index: int, seen: set[str]) -> str:
     return cell_id
 
 
-def render(solution_path: Path) -> str:
-    """The exact text of the student notebook built from ``solution_path``."""
-    solution = nbformat.read(solution_path, as_version=4)
+def render(solution_path: Path, solution: NotebookNode | None = None) -> str:
+    """The exact text of the student notebook built from ``solution_path`` (``solution``:
+    the notebook already read from it)."""
+    if solution is None:
+        solution = nbformat.read(solution_path, as_version=4)
     try:
         nb = student_notebook(solution, solution_path.stem)
     except CourseBuildError as exc:  # name the file rather than the chapter
@@ -326,13 +328,15 @@ def plan(
             "no such directory of solution notebooks",
         )
     wanted: dict[str, str] = {}
+    chapters: dict[str, NotebookNode] = {}
     for path in sorted(source.glob("*.ipynb")):
         if not NOTEBOOK_NAME.match(path.name):
             raise CourseBuildError(
                 str(path), "chapter notebooks are named NN_topic.ipynb, e.g. 01_joystick.ipynb"
             )
-        wanted[path.name] = render(path)
-    wanted[FRONT_PAGE] = front_page(source)
+        chapters[path.name] = nbformat.read(path, as_version=4)
+        wanted[path.name] = render(path, chapters[path.name])
+    wanted[FRONT_PAGE] = front_page(chapters)
 
     changes = []
     for name, text in wanted.items():

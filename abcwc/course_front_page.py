@@ -10,9 +10,11 @@ the last column of the first cell's table of sections, where the table has one.
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from pathlib import Path
 
 import nbformat
+from nbformat import NotebookNode
 
 __all__ = ["CHAPTERS_TO_COME", "chapter_references", "front_page"]
 
@@ -40,12 +42,7 @@ def chapter_references(text: str) -> set[str]:
     return found
 
 
-def _first_cell(path: Path) -> str:
-    notebook = nbformat.read(path, as_version=4)
-    return notebook.cells[0].source if notebook.cells else ""
-
-
-def _goals(intro: str, path: Path) -> str:
+def _goals(intro: str, notebook: NotebookNode) -> str:
     """The numbered goals after "What you will learn", or the chapter's section titles."""
     if "What you will learn" in intro:
         after = intro.split("What you will learn", 1)[1]
@@ -53,7 +50,6 @@ def _goals(intro: str, path: Path) -> str:
                  re.findall(r"^\d+\.\s+(.+?)(?=^\d+\.\s|^\s*$|^\||\Z)", after, re.M | re.S)]
         if goals:
             return "<br>".join(f"{k}. {goal.rstrip(';.')}" for k, goal in enumerate(goals, 1))
-    notebook = nbformat.read(path, as_version=4)
     sections = [line[3:].strip() for cell in notebook.cells if cell.cell_type == "markdown"
                 for line in cell.source.splitlines() if line.startswith("## ")]
     sections = [s for s in sections if not s.lower().startswith(("summary", "stretch", "on the"))]
@@ -74,13 +70,17 @@ def _thesis(intro: str) -> str:
     return ", ".join(sections)
 
 
-def front_page(solutions_dir: str | Path) -> str:
-    """The text of ``course/README.md`` for the chapters in ``solutions_dir``."""
+def front_page(chapters: str | Path | Mapping[str, NotebookNode]) -> str:
+    """The text of ``course/README.md`` for ``chapters``: the solution notebooks by file
+    name (as ``course build`` has read them), or the folder that holds them."""
+    if not isinstance(chapters, Mapping):
+        chapters = {path.name: nbformat.read(path, as_version=4)
+                    for path in sorted(Path(chapters).glob("*.ipynb"))}
     rows = {}
-    for path in sorted(Path(solutions_dir).glob("*.ipynb")):
-        intro = _first_cell(path)
-        title = intro.splitlines()[0].lstrip("# ").strip() if intro else path.stem
-        rows[path.name[:2]] = (f"[{title}]({path.name})", _goals(intro, path), _thesis(intro))
+    for name, notebook in sorted(chapters.items()):
+        intro = notebook.cells[0].source if notebook.cells else ""
+        title = intro.splitlines()[0].lstrip("# ").strip() if intro else Path(name).stem
+        rows[name[:2]] = (f"[{title}]({name})", _goals(intro, notebook), _thesis(intro))
     for number, (title, teaches, thesis) in CHAPTERS_TO_COME.items():
         if number not in rows:
             rows[number] = (f"{number} · {title} (still to come)", teaches, thesis)

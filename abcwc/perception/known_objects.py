@@ -90,7 +90,7 @@ class Detection:
     clockwise from top left, through ``homography``), the matches kept by the ratio test
     and the RANSAC ``inliers`` among them, the distinctive region's ``correlation``
     (nan without one), whether it was ``verified``, and the ``bearing`` (rad, left
-    positive) of the outline's centre."""
+    positive) of the outline's centre, where its diagonals cross."""
 
     name: str
     outline: np.ndarray
@@ -100,11 +100,6 @@ class Detection:
     correlation: float
     verified: bool
     bearing: float
-
-    @property
-    def centre(self) -> np.ndarray:
-        """(2,) px: where the outline's diagonals cross (the plane's centre in view)."""
-        return _diagonal_crossing(self.outline)
 
 
 def make_features(kind: str = "sift", count: int = 0):
@@ -197,11 +192,10 @@ def _ncc(a: np.ndarray, b: np.ndarray) -> float:
 @dataclass
 class _Reference:
     obj: KnownObject
-    gray: np.ndarray  # as matched (ORB: shrunk)
-    scale: float  # reference px per matched px
+    scale: float  # reference px per matched px (ORB matches a shrunk reference)
     keypoints: tuple
     descriptors: np.ndarray | None
-    matcher: cv2.FlannBasedMatcher = field(repr=False, default=None)
+    matcher: cv2.FlannBasedMatcher = field(repr=False)
 
 
 class ObjectDetector:
@@ -251,8 +245,8 @@ class ObjectDetector:
             if descriptors is not None and len(descriptors) >= 2:
                 matcher.add([descriptors])
                 matcher.train()
-            self._references.append(_Reference(obj, gray, scale, tuple(keypoints),
-                                               descriptors, matcher))
+            self._references.append(_Reference(obj, scale, tuple(keypoints), descriptors,
+                                               matcher))
 
     @property
     def objects(self) -> list[KnownObject]:

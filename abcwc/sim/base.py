@@ -15,6 +15,7 @@ wheel speeds (:mod:`abcwc.sim.motor`), physics advances, and the sensors report.
 from __future__ import annotations
 
 import math
+from functools import cached_property
 
 import numpy as np
 import pymunk
@@ -107,11 +108,6 @@ class SimBase(BodyMixin):
                                              p.depth_scan.vertical_fov_deg)
         self._camera_rng = rngs[6]
         self._image: CameraImage | None = None
-        self._sign_targets = tuple(  # the world's signs and markers, as the camera draws them
-            PlanarTarget(sign.name, house_sign(sign.word), sign.width, sign.centre, sign.facing)
-            for sign in self.world.signs) + tuple(
-            PlanarTarget(f"marker {m.marker_id}", m.image(), m.width, m.centre, m.facing)
-            for m in self.world.markers)
         self._build_space(self._start_pose(start), people)
         # what each sensor can see of the walls and objects from its height (static)
         w = self.world
@@ -317,11 +313,21 @@ class SimBase(BodyMixin):
         if self.camera_mode is not None and (force or phase == 4):
             self._image = self.render_camera()
 
+    @cached_property
+    def _wall_targets(self) -> tuple[PlanarTarget, ...]:
+        """The world's signs and markers as the camera draws them (made at the first
+        image, not for a chair that never takes one)."""
+        return tuple(
+            PlanarTarget(sign.name, house_sign(sign.word), sign.width, sign.centre, sign.facing)
+            for sign in self.world.signs) + tuple(
+            PlanarTarget(f"marker {m.marker_id}", m.image(), m.width, m.centre, m.facing)
+            for m in self.world.markers)
+
     def render_camera(self, rng: bool = True) -> CameraImage:
         """What the colour camera sees now (with the frame's lighting, blur and noise
         drawn from the seeded generator; the ideal image with ``rng`` False)."""
         p, w, camera = self.params, self.world, self.camera
-        targets = self._sign_targets + tuple(
+        targets = self._wall_targets + tuple(
             t for t in (walker.tag_target() for walker in self.walkers) if t is not None)
         pixels = render_colour(camera, self.pose, p.depth_scan.mount, p.depth_scan.height,
                                w.walls, w.bands, circles_of(self.walkers), targets,

@@ -275,6 +275,27 @@ def bench_signs() -> dict[str, float]:
     return figures
 
 
+@benchmark("speech", "spoken commands on espeak-ng voices and sentences the recogniser's "
+           "thresholds never saw: % recognised, % false activations, x real time, "
+           "quiet and at 20 and 10 dB SNR", repeat=False)
+def bench_speech() -> dict[str, float]:
+    from abcwc.experiments.speech_trials import TEST_DISTRACTORS, floor_commands, rates, run_trials
+    from abcwc.perception.speech.recognizer import CommandRecognizer
+    from abcwc.perception.speech.synthesis import TEST_VOICES
+
+    commands = floor_commands()
+    recogniser = CommandRecognizer(commands)
+    figures = {}
+    for snr in (None, 20.0, 10.0):
+        found = rates(run_trials(recogniser, commands.phrases, list(TEST_DISTRACTORS),
+                                 TEST_VOICES, snr))
+        label = "quiet" if snr is None else f"{snr:.0f} dB"
+        figures[f"{label}: recognised (%)"] = 100 * found.recognised
+        figures[f"{label}: false activations (%)"] = 100 * found.false_activations
+        figures[f"{label}: x real time"] = found.times_real_time
+    return figures
+
+
 @benchmark("follow", "the tag follower behind Ana for 60 simulated s (camera, lidar, "
            "tracking, obstacle checks): real-time factor", repeat=False)
 def bench_follow() -> dict[str, float]:

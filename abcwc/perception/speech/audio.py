@@ -1,0 +1,110 @@
+"""Audio buffers for the recogniser: checked, brought to 16 kHz mono 16-bit, and given
+the low noise floor a real room has.
+
+The acoustic model that ships with pocketsphinx was trained on 16 kHz speech, so every
+buffer is resampled to ``SAMPLE_RATE`` with a polyphase filter
+(``scipy.signal.resample_poly``: 22 050 Hz espeak-ng output becomes 16 000 Hz by
+320/441). Synthetic speech comes wrapped in pure digital silence, which real rooms never
+have: the decoder's feature normalisation (cepstral mean over the utterance) is thrown
+off by it, so ``with_noise_floor`` adds white noise about 60 dB below full scale.
+
+A buffer that cannot hold speech is refused with a message that says what is allowed:
+empty, shorter than ``MIN_SECONDS``, longer than ``MAX_SECONDS``, not finite, silent,
+or clipped on more than ``MAX_CLIPPED_FRACTION`` of its samples.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.signal import resample_poly
+
+SAMPLE_RATE = 16_000          # Hz, what the acoustic model was trained on
+MIN_RATE, MAX_RATE = 8_000, 96_000
+MIN_SECONDS = 0.2             # shorter than the shortest command ("stop" is ~0.4 s)
+MAX_SECONDS = 30.0            # one utterance, not a recording session
+SILENT_RMS = 1.0e-4           # of full scale (-80 dBFS): nothing was heard
+MAX_CLIPPED_FRACTION = 0.01   # of samples at full scale
+NOISE_FLOOR = 1.0e-3          # RMS of full scale (-60 dBFS), a quiet room's hiss
+
+
+class AudioError(ValueError):
+    """An audio buffer the recogniser cannot use; the message says what is allowed."""
+
+
+def to_float_audio(samples: np.ndarray, rate: int) -> np.ndarray:
+    """Check ``samples`` (mono: int16, or float in [-1, 1]) taken at ``rate`` Hz, and
+    return them as float64 in [-1, 1] at ``SAMPLE_RATE``.
+
+    Raises ``AudioError`` for a buffer that is empty, multi-channel, of another dtype,
+    at a rate outside 8-96 kHz, too short or too long, not finite, silent or clipped."""
+    x = np.asarray(samples)
+    if isinstance(rate, bool) or not isinstance(rate, (int, np.integer)):
+        raise AudioError(f"rate must be an integer number of samples per second, got {rate!r}")
+    if not MIN_RATE <= rate <= MAX_RATE:
+        raise AudioError(f"rate {rate} Hz is outside {MIN_RATE}-{MAX_RATE} Hz; "
+                         f"speech is usually recorded at 16000, 22050, 44100 or 48000 Hz")
+    if x.ndim == 2 and 1 in x.shape:
+        x = x.reshape(-1)
+    if x.ndim != 1:
+        raise AudioError(f"audio must be mono, one sample per entry; got shape {x.shape} "
+                         f"(average the channels first)")
+    if x.size == 0:
+        raise AudioError("the audio buffer is empty")
+    if x.dtype == np.int16:
+        x = x.astype(np.float64) / 32768.0
+    elif np.issubdtype(x.dtype, np.floating):
+        x = x.astype(np.float64)
+        if not np.all(np.isfinite(x)):
+            raise AudioError("audio holds NaN or infinite samples")
+        peak = float(np.max(np.abs(x)))
+        if peak > 1.0:
+            raise AudioError(f"float audio must lie in [-1, 1] (full scale); its peak is "
+                             f"{peak:.3g}: pass int16 samples, or divide by 32768")
+    else:
+        raise AudioError(f"audio must be int16 or float in [-1, 1]; got {x.dtype}")
+    seconds = x.size / rate
+    if not MIN_SECONDS <= seconds <= MAX_SECONDS:
+        raise AudioError(f"audio lasts {seconds:.3g} s; one command needs "
+                         f"{MIN_SECONDS}-{MAX_SECONDS} s")
+    rms = math.sqrt(float(np.mean(x * x)))
+    if rms < SILENT_RMS:
+        raise AudioError(f"the audio is silent (RMS {20 * math.log10(max(rms, 1e-12)):.0f} "
+                         f"dBFS; anything above {20 * math.log10(SILENT_RMS):.0f} dBFS is "
+                         f"heard): is the microphone muted?")
+    clipped = float(np.mean(np.abs(x) >= 32767 / 32768))
+    if clipped > MAX_CLIPPED_FRACTION:
+        raise AudioError(f"{100 * clipped:.1f} % of the samples are at full scale (clipped; "
+                         f"at most {100 * MAX_CLIPPED_FRACTION:.0f} % allowed): turn the "
+                         f"microphone's gain down")
+    if rate != SAMPLE_RATE:
+        g = math.gcd(SAMPLE_RATE, int(rate))
+        x = resample_poly(x, SAMPLE_RATE // g, int(rate) // g)
+    return x
+
+
+def with_noise_floor(x: np.ndarray, rms: float = NOISE_FLOOR, seed: int = 0) -> np.ndarray:
+    """``x`` (float, full scale 1) with seeded white noise of ``rms`` added: the hiss of a
+    quiet room, which pure digital silence around synthetic speech lacks."""
+    rng = np.random.default_rng(seed)
+    return x + rng.normal(0.0, rms, x.size)
+
+
+def mix_at_snr(speech: np.ndarray, snr_db: float, seed: int = 0,
+               speech_mask: np.ndarray | None = None) -> np.ndarray:
+    """``speech`` with seeded white noise at ``snr_db`` dB signal-to-noise ratio, the
+    signal power measured where ``speech_mask`` is true (default: samples above 1 % of
+    the peak, so that padding silence does not dilute it)."""
+    if not math.isfinite(snr_db):
+        raise ValueError(f"snr_db must be finite, got {snr_db}")
+    if speech_mask is None:
+        speech_mask = np.abs(speech) > 0.01 * float(np.max(np.abs(speech)))
+    power = float(np.mean(speech[speech_mask] ** 2))
+    rng = np.random.default_rng(seed)
+    return speech + rng.normal(0.0, math.sqrt(power / 10 ** (snr_db / 10)), speech.size)
+
+
+def to_int16(x: np.ndarray) -> np.ndarray:
+    """Float audio in [-1, 1] as int16 samples, clipped at full scale."""
+    return np.clip(np.round(x * 32768.0), -32768, 32767).astype(np.int16)

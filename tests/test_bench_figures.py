@@ -9,7 +9,7 @@ from abcwc.bench import BENCHMARKS
 
 QUICK = ["costmap", "dwa", "planner", "grid", "correlative", "camera", "signs"]
 SLOW = ["sim", "ekf", "nees", "posegraph", "carmen", "slam", "notebooks", "navigator",
-        "follow"]
+        "follow", "speech"]
 
 
 def test_every_benchmark_is_registered_with_a_description():

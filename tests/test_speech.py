@@ -153,10 +153,34 @@ def test_commands_are_recognised_and_carry_their_meaning(recogniser, phrase):
 
 
 def test_a_command_inside_a_sentence_is_refused(recogniser):
+    from abcwc.perception.speech.recognizer import Verification
+
     heard = recogniser.recognise(say("stop worrying about it"))
     assert heard.phrase == "stop"          # the grammar alone would have obeyed
     assert not heard.accepted
     assert "outside the command" in heard.reason
+    spotting = recogniser.judged(heard, Verification(max_outside_speech=1.0))
+    assert spotting.accepted and spotting.command.phrase == "stop"
+
+
+def test_word_ratio_counts_phones_pro_rata():
+    from abcwc.perception.speech.recognizer import word_log_likelihood_ratio
+
+    # phones: frames 0-9 (-20), 10-19 (-40), 20-39 (-10); the word spans frames 5-24
+    phones = np.array([[-20.0, 0, 9], [-40.0, 10, 19], [-10.0, 20, 39]])
+    free = -20 * 5 / 10 - 40 - 10 * 5 / 20
+    assert word_log_likelihood_ratio(-80.0, 5, 24, phones) == pytest.approx((-80 - free) / 20)
+
+
+def test_speech_outside_the_command_is_measured_by_energy():
+    from abcwc.perception.speech.recognizer import speech_outside_fraction
+
+    rng = np.random.default_rng(2)
+    x = rng.normal(0, 1e-3, SAMPLE_RATE)             # 100 frames of hiss
+    x[3200:6400] += tone(0.2, SAMPLE_RATE)           # frames 20-39 (160 samples each): speech
+    x[9600:11200] += tone(0.1, SAMPLE_RATE)          # frames 60-69: more speech
+    assert speech_outside_fraction(x, 20, 39) == pytest.approx(10 / 30, abs=0.04)
+    assert speech_outside_fraction(x, 15, 75) == 0.0
 
 
 def test_noise_and_conversation_are_not_commands(recogniser):
@@ -189,12 +213,17 @@ def test_recognition_is_at_least_five_times_faster_than_real_time(recogniser):
 
 
 def test_thresholds_are_checked(recogniser):
-    from abcwc.perception.speech.recognizer import CommandRecognizer
+    from abcwc.perception.speech.recognizer import CommandRecognizer, Verification
 
     with pytest.raises(ValueError, match="min_mean_llr"):
-        CommandRecognizer(recogniser.commands, min_mean_llr=1.0)
+        Verification(min_mean_llr=1.0)
+    with pytest.raises(ValueError, match="min_word_llr"):
+        Verification(min_word_llr=float("nan"))
+    assert Verification.none().refusal("stop", (("stop", -50.0),), 1.0) == ""
     with pytest.raises(ValueError, match="max_outside_speech"):
-        CommandRecognizer(recogniser.commands, max_outside_speech=2.0)
+        Verification(max_outside_speech=2.0)
+    with pytest.raises(ValueError, match="must be a Verification"):
+        CommandRecognizer(recogniser.commands, -4.0)
     with pytest.raises(ValueError, match="not in the pronunciation dictionary"):
         CommandRecognizer(CommandSet.from_phrases(["go to the zxqvw"]))
 
@@ -205,7 +234,7 @@ def test_spotting_single_words_fires_on_conversation_more_than_two_word_commands
     them; the two-word commands (stop aside, in both sets) fire less."""
     _need_speech_tools()
     from abcwc.experiments.speech_trials import TEST_DISTRACTORS, TUNING_DISTRACTORS, run_trials
-    from abcwc.perception.speech.recognizer import CommandRecognizer
+    from abcwc.perception.speech.recognizer import CommandRecognizer, Verification
     from abcwc.perception.speech.synthesis import TEST_VOICES, TUNING_VOICES
 
     two_word = CommandSet.from_phrases(["drive forward", "drive reverse", "turn left",
@@ -213,7 +242,7 @@ def test_spotting_single_words_fires_on_conversation_more_than_two_word_commands
     single = CommandSet.from_phrases(["forward", "reverse", "left", "right"])
     fired = {}
     for name, commands in (("single", single), ("two", two_word)):
-        spotting = CommandRecognizer(commands, max_outside_speech=1.0)
+        spotting = CommandRecognizer(commands, Verification(max_outside_speech=1.0))
         trials = run_trials(spotting, [], list(TUNING_DISTRACTORS + TEST_DISTRACTORS),
                             TUNING_VOICES[:2] + TEST_VOICES[:2])
         fired[name] = sum(t.heard.accepted for t in trials)

@@ -10,13 +10,13 @@ one word with a command, and none is a command.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from abcwc.perception.speech.audio import SAMPLE_RATE, mix_at_snr, to_int16, with_noise_floor
 from abcwc.perception.speech.commands import THESIS_SINGLE_WORDS, CommandSet
-from abcwc.perception.speech.recognizer import CommandRecognizer, Recognition
+from abcwc.perception.speech.recognizer import CommandRecognizer, Recognition, Verification
 from abcwc.perception.speech.synthesis import Voice, padded, speak
 
 TUNING_DISTRACTORS = (
@@ -85,6 +85,13 @@ def run_trials(recognizer: CommandRecognizer, commands: list[str], distractors: 
         trials.append(Trial(text, is_command, voice, snr_db, recognizer.recognise(audio),
                             audio.size / SAMPLE_RATE))
     return trials
+
+
+def judged_again(trials: list[Trial], recognizer: CommandRecognizer,
+                 verification: Verification) -> list[Trial]:
+    """``trials`` judged with other thresholds, without decoding again (record them
+    with ``Verification.none()`` to judge them any way)."""
+    return [replace(t, heard=recognizer.judged(t.heard, verification)) for t in trials]
 
 
 @dataclass(frozen=True)

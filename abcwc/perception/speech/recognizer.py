@@ -25,7 +25,7 @@ So each answer is checked twice before the chair obeys it.
    lie outside the command's words. "stop worrying about it" aligns "stop" to its first
    word and calls the rest silence; this check refuses it.
 
-The thresholds were set on espeak-ng voices and sentences of
+The thresholds (``Verification``) were set on espeak-ng voices and sentences of
 ``abcwc.experiments.speech_trials``' tuning set, and are measured on its test set of
 other voices and sentences.
 """
@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -55,53 +55,107 @@ def _model_paths() -> tuple[str, str, str]:
 
 @dataclass(frozen=True)
 class Recognition:
-    """What was heard: the ``command`` obeyed (None when rejected), the grammar's best
-    ``phrase`` whether accepted or not, its words' mean and weakest log-likelihood
-    ratios (per frame; ``word_llrs`` has each word's), the fraction of speech outside
-    the command's words, why it was rejected (``reason``, "" when accepted) and the
-    decoding time (s)."""
+    """What was heard: the ``command`` obeyed (None when refused), the grammar's best
+    ``phrase`` whether accepted or not, each of its words' log-likelihood ratio per frame
+    (``word_llrs``; empty when no command fit), the fraction of the speech outside the
+    command's words, why it was refused (``reason``, "" when accepted) and the decoding
+    time (s)."""
 
     command: SpokenCommand | None
     phrase: str
-    mean_llr: float
-    weakest_llr: float
+    word_llrs: tuple[tuple[str, float], ...]
     outside_speech: float
     reason: str
     seconds: float
-    word_llrs: tuple[tuple[str, float], ...] = ()
 
     @property
     def accepted(self) -> bool:
         return self.command is not None
 
+    @property
+    def mean_llr(self) -> float:
+        """The words' mean log-likelihood ratio per frame (-inf when no command fit)."""
+        return float(np.mean([v for _, v in self.word_llrs])) if self.word_llrs else -math.inf
+
+    @property
+    def weakest_llr(self) -> float:
+        """The weakest word's log-likelihood ratio per frame (-inf when none fit)."""
+        return min(v for _, v in self.word_llrs) if self.word_llrs else -math.inf
+
+
+@dataclass(frozen=True)
+class Verification:
+    """The thresholds an answer of the grammar must clear (module notes): the words'
+    mean log-likelihood ratio per frame (``min_mean_llr``), the weakest word's
+    (``min_word_llr``), a one-word command's (``min_single_word_llr``), and the largest
+    fraction of the speech outside the command's words (``max_outside_speech``; 1.0
+    lets the command be anywhere in the utterance, as a keyword spotter listens).
+
+    The defaults were set on the tuning voices and sentences of
+    ``abcwc.experiments.speech_trials``: the lowest mean that refused all of them.
+    ``Verification.none()`` checks nothing: the grammar's answer as it comes."""
+
+    min_mean_llr: float = -4.0
+    min_word_llr: float = -5.5
+    min_single_word_llr: float = -3.5
+    max_outside_speech: float = 0.3
+
+    def __post_init__(self) -> None:
+        for name in ("min_mean_llr", "min_word_llr", "min_single_word_llr"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and not math.isnan(value)
+                    and value <= 0 and value != math.inf):
+                raise ValueError(f"{name} must be a log-likelihood ratio <= 0 (per frame; "
+                                 f"-inf turns the check off), got {value!r}")
+        if not 0.0 <= self.max_outside_speech <= 1.0:
+            raise ValueError(f"max_outside_speech must be a fraction in [0, 1], "
+                             f"got {self.max_outside_speech!r}")
+
+    @classmethod
+    def none(cls) -> Verification:
+        """No check at all: every answer of the grammar stands."""
+        return cls(-math.inf, -math.inf, -math.inf, 1.0)
+
+    def refusal(self, phrase: str, word_llrs: tuple[tuple[str, float], ...],
+                outside_speech: float) -> str:
+        """Why the grammar's answer ``phrase`` (its words' ratios ``word_llrs``) is
+        refused, or "" when it stands."""
+        if not word_llrs:
+            return "no command fits the sound from start to end"
+        word, weakest = min(word_llrs, key=lambda pair: pair[1])
+        mean = float(np.mean([llr for _, llr in word_llrs]))
+        if len(word_llrs) == 1 and weakest < self.min_single_word_llr:
+            return (f'"{phrase}" fits the sound badly (log-likelihood ratio {weakest:.2f} '
+                    f'per frame; a one-word command needs {self.min_single_word_llr:.2f})')
+        if len(word_llrs) > 1 and mean < self.min_mean_llr:
+            return (f'"{phrase}" fits the sound badly (mean log-likelihood ratio '
+                    f'{mean:.2f} per frame, needed {self.min_mean_llr:.2f})')
+        if len(word_llrs) > 1 and weakest < self.min_word_llr:
+            return (f'"{word}" fits the sound badly (log-likelihood ratio {weakest:.2f} '
+                    f'per frame, needed {self.min_word_llr:.2f})')
+        if outside_speech > self.max_outside_speech:
+            return (f"{100 * outside_speech:.0f} % of the speech lies outside the command "
+                    f"(at most {100 * self.max_outside_speech:.0f} %): more was said")
+        return ""
+
 
 class CommandRecognizer:
-    """pocketsphinx with the ``commands`` grammar and the two checks above.
+    """pocketsphinx with the ``commands`` grammar and the checks of ``verification``.
 
     ``recognise(samples, rate)`` takes one utterance (int16, or float in [-1, 1]; any
     rate from 8 to 96 kHz) and returns a ``Recognition``. Bad buffers raise
     ``AudioError`` with what is allowed."""
 
-    def __init__(self, commands: CommandSet, min_mean_llr: float = -4.0,
-                 min_word_llr: float = -5.5, min_single_word_llr: float = -3.5,
-                 max_outside_speech: float = 0.3,
+    def __init__(self, commands: CommandSet, verification: Verification = Verification(),
                  noise_floor_seed: int = 0) -> None:
         from pocketsphinx import Decoder
 
-        for name, value in (("min_mean_llr", min_mean_llr), ("min_word_llr", min_word_llr),
-                            ("min_single_word_llr", min_single_word_llr)):
-            if not math.isfinite(value) or value > 0:
-                raise ValueError(f"{name} must be a finite log-likelihood ratio <= 0, "
-                                 f"got {value}")
-        if not 0.0 <= max_outside_speech <= 1.0:
-            raise ValueError(f"max_outside_speech must be a fraction in [0, 1], "
-                             f"got {max_outside_speech}")
+        if not isinstance(verification, Verification):
+            raise ValueError(f"verification must be a Verification, got "
+                             f"{type(verification).__name__}")
         hmm, dictionary, phone_lm = _model_paths()
         self.commands = commands
-        self.min_mean_llr = min_mean_llr
-        self.min_word_llr = min_word_llr
-        self.min_single_word_llr = min_single_word_llr
-        self.max_outside_speech = max_outside_speech
+        self.verification = verification
         self.noise_floor_seed = noise_floor_seed
         self._grammar = Decoder(hmm=hmm, dict=dictionary, lm=None, samprate=SAMPLE_RATE,
                                 loglevel="FATAL")
@@ -121,31 +175,23 @@ class CommandRecognizer:
         pcm = to_int16(x).tobytes()
         phrase, words = self._decode_words(pcm)
         phones = self._decode_phones(pcm)
-        if phrase not in self.commands:
-            return Recognition(None, phrase, -math.inf, -math.inf, 1.0,
-                               "no command fits the sound from start to end",
-                               time.perf_counter() - started)
-        llrs = tuple((w, _word_llr(score, first, last, phones))
-                     for w, score, first, last in words)
-        word, weakest = min(llrs, key=lambda pair: pair[1])
-        mean = float(np.mean([llr for _, llr in llrs]))
-        outside = _speech_outside(x, words[0][2], words[-1][3])
-        reason = ""
-        if len(words) == 1 and weakest < self.min_single_word_llr:
-            reason = (f'"{phrase}" fits the sound badly (log-likelihood ratio {weakest:.2f} '
-                      f'per frame; a one-word command needs {self.min_single_word_llr:.2f})')
-        elif len(words) > 1 and mean < self.min_mean_llr:
-            reason = (f'"{phrase}" fits the sound badly (mean log-likelihood ratio '
-                      f'{mean:.2f} per frame, needed {self.min_mean_llr:.2f})')
-        elif len(words) > 1 and weakest < self.min_word_llr:
-            reason = (f'"{word}" fits the sound badly (log-likelihood ratio {weakest:.2f} '
-                      f'per frame, needed {self.min_word_llr:.2f})')
-        elif outside > self.max_outside_speech:
-            reason = (f"{100 * outside:.0f} % of the speech lies outside the command "
-                      f"(at most {100 * self.max_outside_speech:.0f} %): more was said")
+        llrs: tuple[tuple[str, float], ...] = ()
+        outside = 1.0
+        if phrase in self.commands and words:
+            llrs = tuple((w, word_log_likelihood_ratio(score, first, last, phones))
+                         for w, score, first, last in words)
+            outside = speech_outside_fraction(x, words[0][2], words[-1][3])
+        reason = self.verification.refusal(phrase, llrs, outside)
         command = None if reason else self.commands[phrase]
-        return Recognition(command, phrase, mean, weakest, outside, reason,
-                           time.perf_counter() - started, llrs)
+        return Recognition(command, phrase, llrs, outside, reason,
+                           time.perf_counter() - started)
+
+    def judged(self, heard: Recognition, verification: Verification) -> Recognition:
+        """``heard`` judged again with other thresholds (no decoding): for choosing
+        thresholds from recorded trials."""
+        reason = verification.refusal(heard.phrase, heard.word_llrs, heard.outside_speech)
+        return replace(heard, command=None if reason else self.commands[heard.phrase],
+                       reason=reason)
 
     def _decode_words(self, pcm: bytes) -> tuple[str, list[tuple[str, float, int, int]]]:
         """The grammar's phrase and its words: (word, log acoustic score, first and last
@@ -182,9 +228,15 @@ def _is_filler(word: str) -> bool:
     return word.startswith("<") or word.startswith("[") or word.startswith("+")
 
 
-def _word_llr(score: float, first: int, last: int, phones: np.ndarray) -> float:
-    """Per-frame log-likelihood ratio of a word aligned to frames first..last against
-    the free phone sequence over the same frames (phones partly inside count pro rata)."""
+def word_log_likelihood_ratio(score: float, first: int, last: int, phones: np.ndarray
+                              ) -> float:
+    """Per-frame log-likelihood ratio of a word against the free phone sequence.
+
+    ``score`` is the natural log of the word's acoustic likelihood over frames
+    ``first``..``last`` (inclusive, 10 ms each), as the grammar aligned it; ``phones``
+    (N, 3) rows are the free phone sequence's (log likelihood, first frame, last frame).
+    A phone partly inside the word's frames counts pro rata (its log likelihood times the
+    share of its frames inside): module notes, check 1."""
     overlap = np.minimum(phones[:, 2], last) - np.maximum(phones[:, 1], first) + 1
     inside = overlap > 0
     frames = phones[inside, 2] - phones[inside, 1] + 1
@@ -192,9 +244,11 @@ def _word_llr(score: float, first: int, last: int, phones: np.ndarray) -> float:
     return (score - free) / (last - first + 1)
 
 
-def _speech_outside(x: np.ndarray, first: int, last: int) -> float:
-    """The fraction of speech frames (10 ms, energy ``SPEECH_ABOVE_FLOOR_DB`` over the
-    quietest tenth) that lie outside frames first..last."""
+def speech_outside_fraction(x: np.ndarray, first: int, last: int) -> float:
+    """The fraction of the speech frames of ``x`` (float audio at 16 kHz) that lie
+    outside frames ``first``..``last`` (inclusive, 10 ms each). A frame is speech when
+    its energy (dB) is ``SPEECH_ABOVE_FLOOR_DB`` over the 10th percentile of the
+    utterance's frames: module notes, check 2."""
     hop = SAMPLE_RATE // FRAME_RATE
     n = x.size // hop
     energy = 10 * np.log10(np.mean(x[: n * hop].reshape(n, hop) ** 2, axis=1) + 1e-12)

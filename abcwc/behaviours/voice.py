@@ -1,0 +1,110 @@
+"""Driving by voice (or by typed command): the thesis's A.4, with the chair's other
+behaviours behind the commands that need them.
+
+A heard command replaces the one before it, as in A.4:
+
+* a motion ("drive forward", "turn left", ...) is held, through the safety filter
+  (comfort limits, the sonar and IR stop, the joystick override), until the next
+  command or for ``hold_seconds`` (10 s), whichever comes first: a person who cannot
+  say "stop" in time is not driven into the far wall;
+* "stop" stands still, and cancels a goal or a follow;
+* "go to the <place>" hands the chair to the ``navigator`` (which has its own safety
+  filter), "follow me" to the ``follower``; when either ends the chair stands still
+  and ``last_outcome`` says how it ended.
+
+The behaviour never succeeds on its own: it listens until it is cancelled.
+"""
+
+from __future__ import annotations
+
+import math
+
+from abcwc.behaviours.base import Behaviour, BehaviourBase, positive_number
+from abcwc.control.safety import SafetyFilter
+from abcwc.perception.speech.commands import CommandSet, SpokenCommand
+from abcwc.types import SensorFrame, Twist
+
+
+class VoiceControl(BehaviourBase):
+    """Obey ``commands`` as they are heard (module notes). ``navigator`` and
+    ``follower`` are optional; a command that needs one that is missing is refused."""
+
+    def __init__(self, commands: CommandSet, navigator: Behaviour | None = None,
+                 follower: Behaviour | None = None, safety: SafetyFilter | None = None,
+                 hold_seconds: float = 10.0) -> None:
+        super().__init__()
+        self.commands = commands
+        self.navigator = navigator
+        self.follower = follower
+        self.safety = safety or SafetyFilter()
+        self.hold_seconds = positive_number("hold_seconds", hold_seconds, "s")
+        self.heard: list[tuple[float, str]] = []  # (t, phrase) of every command obeyed
+        self.last_outcome: str | None = None
+        self._reset_state()
+
+    def _reset_state(self) -> None:
+        self._wanted = Twist(0.0, 0.0)
+        self._since = -math.inf
+        self._delegate: Behaviour | None = None
+        self._pending: SpokenCommand | None = None
+        self._t = 0.0
+
+    def reset(self) -> None:
+        super().reset()
+        self.safety.reset()
+        self._reset_state()
+
+    def hear(self, command: SpokenCommand | str) -> SpokenCommand:
+        """Obey ``command`` (a recogniser's ``SpokenCommand``, or typed text, parsed by
+        the same grammar) from the next frame on. Raises ``ValueError`` for text that is
+        not a command (the message lists them) or for a command whose behaviour this
+        chair lacks."""
+        if isinstance(command, str):
+            command = self.commands.parse(command)
+        if command.phrase not in self.commands:
+            raise ValueError(f'"{command.phrase}" is not one of this chair\'s commands')
+        if command.place is not None and self.navigator is None:
+            raise ValueError(f'"{command.phrase}" needs a navigator: '
+                             "VoiceControl(commands, navigator=...)")
+        if command.follow and self.follower is None:
+            raise ValueError('"follow me" needs a follower: VoiceControl(commands, '
+                             "follower=...)")
+        self._pending = command
+        return command
+
+    def update(self, frame: SensorFrame) -> Twist:
+        self._t = frame.t
+        if self._pending is not None:
+            self._start(self._pending, frame.t)
+            self._pending = None
+        if self._delegate is not None:
+            command = self._delegate(frame)
+            if self._delegate.running:
+                return command
+            self.last_outcome = (self._delegate.failure or
+                                 self._delegate.status.value)
+            self._delegate, self._wanted = None, Twist(0.0, 0.0)
+        if frame.t - self._since > self.hold_seconds:
+            self._wanted = Twist(0.0, 0.0)
+        return self.safety.apply(frame, self._wanted)
+
+    def _start(self, command: SpokenCommand, t: float) -> None:
+        if self._delegate is not None and self._delegate.running:
+            self._delegate.cancel()
+            self.last_outcome = "cancelled"
+        self._delegate = None
+        self.heard.append((t, command.phrase))
+        self._wanted, self._since = Twist(0.0, 0.0), t
+        if command.twist is not None:
+            self._wanted = command.twist
+        elif command.place is not None:
+            self.navigator.go_to(command.place)  # type: ignore[union-attr]
+            self._delegate = self.navigator
+        elif command.follow:
+            self.follower.reset()  # type: ignore[union-attr]
+            self._delegate = self.follower
+
+    def cancel(self) -> None:
+        if self._delegate is not None and self._delegate.running:
+            self._delegate.cancel()
+        super().cancel()

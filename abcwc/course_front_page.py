@@ -19,10 +19,6 @@ from nbformat import NotebookNode
 __all__ = ["CHAPTERS_TO_COME", "chapter_references", "front_page"]
 
 CHAPTERS_TO_COME = {
-    "04": ("Speech commands",
-           "Spoken commands recognised offline, restricted to the chair's commands and "
-           "checked before they move anyone; why one-word commands fire on conversation",
-           "4.1.7, A.4"),
     "18": ("The capstone",
            "The whole stack on one errand: spoken or typed goal, map, navigation among "
            "people, a sign or a person to find on the way", "4.3.7, 5.3"),

@@ -92,10 +92,12 @@ class Verification:
     lets the command be anywhere in the utterance, as a keyword spotter listens).
 
     The defaults were set on the tuning voices and sentences of
-    ``abcwc.experiments.speech_trials``: the lowest mean that refused all of them.
+    ``abcwc.experiments.speech_trials``. The lowest mean that refused all of its
+    sentences was -4.0; on the held-out voices that edge let 3 % of the sentences
+    through, so the mean threshold stands a margin of 0.25 above it.
     ``Verification.none()`` checks nothing: the grammar's answer as it comes."""
 
-    min_mean_llr: float = -4.0
+    min_mean_llr: float = -3.75
     min_word_llr: float = -5.5
     min_single_word_llr: float = -3.5
     max_outside_speech: float = 0.3

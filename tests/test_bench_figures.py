@@ -7,7 +7,7 @@ import pytest
 
 from abcwc.bench import BENCHMARKS
 
-QUICK = ["costmap", "dwa", "planner", "grid", "correlative", "camera", "signs"]
+QUICK = ["costmap", "dwa", "planner", "grid", "correlative", "vision"]
 SLOW = ["sim", "ekf", "nees", "posegraph", "carmen", "slam", "notebooks", "navigator",
         "follow", "speech"]
 

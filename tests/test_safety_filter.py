@@ -203,3 +203,28 @@ def test_person_stepping_in_front_of_a_blind_controller_is_not_touched():
     assert frame.collisions == 0
     assert safety.interventions["obstacle"] > 0
     assert chair.pose.x > 8.0  # and went on once the way was clear
+
+
+def test_a_stop_brakes_along_the_arc_the_chair_is_on():
+    """Stopping from (0.6 m/s, -0.3 rad/s): the turn rate falls with the speed, so the
+    curvature stays -0.5 1/m and the chair sweeps the arc its planner checked. The turn
+    ramp alone would have let w reach 0 in 0.2 s while v took 1 s, straightening the
+    path towards whatever the arc was turning away from."""
+    safety = SafetyFilter()
+    cruise = _ramp(safety, Twist(0.6, -0.3), 4.0)
+    assert cruise[-1] == pytest.approx([0.6, -0.3])
+    out = []
+    for k in range(round(3.0 / DT)):
+        t = 4.0 + k * DT
+        twist = safety.apply(make_frame(t), Twist(0.0, 0.0), t)
+        out.append((twist.v, twist.w))
+    out = np.array(out)
+    moving = out[:, 0] > 0.02
+    assert moving.sum() > 20                                   # braking takes time
+    assert np.allclose(out[moving, 1] / out[moving, 0], -0.5)
+    assert out[-1] == pytest.approx([0.0, 0.0])
+    # turning on the spot still stops on the turn ramp
+    spin = SafetyFilter()
+    _ramp(spin, Twist(0.0, 0.6), 2.0)
+    first = spin.apply(make_frame(2.0), Twist(0.0, 0.0), 2.0)
+    assert first.w == pytest.approx(0.6 - spin.limits.max_angular_accel * DT)

@@ -23,8 +23,10 @@ command an autonomous behaviour wants (a :class:`~abcwc.types.Twist`) and the ne
    tray into a table top). NaN (no reading, as the real chair's unwired IR ring) counts
    as nothing.
 5. **Acceleration and jerk limits**: the speed follows the wanted one with a
-   jerk-limited ramp, the turn rate with an acceleration-limited one. Stops by rules 1,
-   2 and 4 skip the ramp: the chair's own motor controller brakes.
+   jerk-limited ramp, the turn rate with an acceleration-limited one. A wanted stop
+   (0, 0) while driving keeps to the arc the chair is on: the turn rate falls in
+   proportion to the speed, so the chair brakes along the way its planner checked.
+   Stops by rules 1, 2 and 4 skip the ramp: the chair's own motor controller brakes.
 
 The braking distance comes from the chair's model (chair.toml): the sensing period, the
 motor controller's input delay and the wheels' first-order lag ``tau`` (a first-order
@@ -47,6 +49,9 @@ import numpy as np
 
 from abcwc.params import ChairParams, default_params
 from abcwc.types import SONAR_FRAME, SensorFrame, StatusFlags, Twist
+
+STOP_ON_ARC_ABOVE = 0.02
+"""m/s: above this speed a wanted stop brakes along the present arc (rule 5)."""
 
 
 @dataclass(frozen=True)
@@ -203,6 +208,15 @@ class SafetyFilter:
                 self._note("obstacle", f"{gap:.2f} m {'ahead' if v > 0 else 'behind'}, "
                                        f"seen by {seen_by}")
                 return Twist(0.0, self.w)
+        if v == 0.0 and w == 0.0 and abs(self.v) > STOP_ON_ARC_ABOVE:
+            # a stop keeps to the arc the chair is on: the turn rate slows with the
+            # speed, in proportion, so the way it sweeps while braking is the way the
+            # planner checked (slowing the turn faster, as the turn ramp alone would,
+            # straightens the path and swings the front into what the arc avoided)
+            curvature = self.w / self.v
+            self.v = self._ramp_speed(0.0, dt)
+            self.w = curvature * self.v
+            return Twist(self.v, self.w)
         self.v = self._ramp_speed(v, dt)
         self.w = self._ramp_turn(w, dt)
         return Twist(self.v, self.w)

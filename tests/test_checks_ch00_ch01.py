@@ -7,6 +7,7 @@ the library's own function handed in.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -171,3 +172,39 @@ def test_square_sequence(capsys):
 )
 def test_square_phase(t, phase):
     assert ch01.square_phase(t) == phase
+
+
+# --- chapter 01, exercise 4: predicting the clockwise square ---------------------------------
+
+MEASURED_CW = 18.1  # deg: worn minus ideal at the end of the clockwise square, as measured
+CLOCKWISE_CHECK = functools.partial(ch01.clockwise_prediction_check, measured=MEASURED_CW)
+
+
+def test_the_clockwise_budget_worked_by_hand():
+    """Side 0.515 m/s x 5 s = 2.57 m; 1 % tyre difference over a 453 mm wheel base: 3.25 deg
+    a straight. A 90.7 deg corner on a 3 % wider wheel base with 0.5 % larger tyres on average:
+    90.7 (1 - 1.005 / 1.03) = 2.20 deg short. Clockwise: 3.5 x 3.25 + 3 x 2.20 = 18.0 deg."""
+    budget = ch01.clockwise_budget()
+    assert budget["straight"] == pytest.approx(3.25, abs=0.01)
+    assert budget["corner_short"] == pytest.approx(2.20, abs=0.01)
+    assert budget["clockwise"] == pytest.approx(18.0, abs=0.05)
+
+
+def test_clockwise_prediction_passes_an_independent_budget(capsys):
+    straight = math.degrees(0.515 * 5 * 0.01 / (0.44 * 1.03))
+    corner = 90.7 * (1 - 1.005 / 1.03)
+    assert_pass(CLOCKWISE_CHECK, lambda: 3.5 * straight + 3 * corner, capsys)
+
+
+@pytest.mark.parametrize(("predicted", "fragment"), [
+    (lambda: 4.8, "counter-clockwise"),       # the worked example's number, sign kept
+    (lambda: -18.0, "the sign"),
+    (lambda: 11.4, "only the straights"),
+    (lambda: 6.6, "only the corners"),
+    (lambda: 45.0, "Budget it"),
+    (lambda: float("nan"), "one number"),
+    (not_written, "NotImplementedError"),
+    (ch01.reference_square_sequence, "abcwc's own"),
+])
+def test_clockwise_prediction_refuses(predicted, fragment, capsys):
+    assert_not_yet(CLOCKWISE_CHECK, predicted, capsys, fragment)

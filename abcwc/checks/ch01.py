@@ -6,7 +6,11 @@ Exercises:
 * ``table_6(direction)``: table 6 corrected, the full-deflection PotCommand for
   forward, reverse, left, right and stop;
 * ``square_sequence(t)``: the open-loop square of appendix A.3 as a function of time:
-  forward 5 s, left 2 s, three times, then forward 2.5 s and stop.
+  forward 5 s, left 2 s, three times, then forward 2.5 s and stop;
+* ``predicted_clockwise_heading_error()``: a number written down *before* the clockwise
+  square is driven: the worn chair's heading error at its end (worn minus ideal, degrees,
+  positive to the left), from the error budget the chapter works out for the
+  counter-clockwise square.
 
 :func:`reference_square_sequence` is the answer the notebook falls back on; the pot
 functions fall back on :mod:`abcwc.control`.
@@ -19,7 +23,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import checker, expect, expect_equal, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_equal, format_value
 from abcwc.control import direction_pot_command, joystick_to_pot_byte
 from abcwc.control.pots import pot_byte_to_deflection
 from abcwc.control.safety import ComfortLimits
@@ -31,6 +35,8 @@ __all__ = [
     "LEFT_LR",
     "SQUARE_PHASES",
     "THESIS_EQN1_VALUES",
+    "clockwise_budget",
+    "clockwise_prediction_check",
     "pot_mapping",
     "reference_square_sequence",
     "square_phase",
@@ -205,3 +211,59 @@ def _check_sample(fn: Callable[[float], PotCommand], t: float, phase: str, where
         expect(seen[phase] == pair, f"{said}, but earlier {phase} sent (fb {seen[phase][0]}, "
                                     f"lr {seen[phase][1]}); use the same bytes every time")
     seen[phase] = pair
+
+
+# --- exercise 4: predict the clockwise square's heading error -------------------------------
+
+
+def clockwise_budget() -> dict[str, float]:
+    """The worn chair's heading-error budget for A.3's square with the reference bytes
+    (degrees, positive to the left): each 5 s straight curves left by the tyres'
+    difference over the effective wheel base, each 2 s corner comes out short by the
+    wheel base's excess (a little less: the larger tyre helps), 3.5 straights and 3
+    corners. Clockwise, a short right corner leaves the chair pointing too far left."""
+    from abcwc.sim import ChairErrors
+
+    p, errors = default_params(), ChairErrors.worn()
+    b_eff = p.wheel_base * errors.wheel_base
+    side = pot_byte_to_deflection(FORWARD_FB, p) * p.max_speed * 5.0
+    straight = math.degrees(side * (errors.drive_wheel_right - errors.drive_wheel_left) / b_eff)
+    turn = math.degrees(-pot_byte_to_deflection(LEFT_LR, p) * p.max_turn_rate * 2.0)
+    tyre_mean = (errors.drive_wheel_left + errors.drive_wheel_right) / 2
+    corner_short = turn - turn * tyre_mean / errors.wheel_base  # > 0: each corner short by
+    return {"straight": straight, "corner_short": corner_short,
+            "clockwise": 3.5 * straight + 3 * corner_short,
+            "counter_clockwise": 3.5 * straight - 3 * corner_short}
+
+
+@checker("prediction")
+def clockwise_prediction_check(predicted: Callable[[], float], measured: float) -> str:
+    """The clockwise square's heading error written before the run, against the budget
+    and against ``measured`` (worn minus ideal at the end, degrees)."""
+    value = predicted()
+    expect(isinstance(value, (int, float)) and math.isfinite(value),
+           f"predicted_clockwise_heading_error() gave {format_value(value)}; write one "
+           "number of degrees")
+    budget = clockwise_budget()
+    straights, corners = 3.5 * budget["straight"], 3 * budget["corner_short"]
+    if abs(value - measured) <= 1.5:
+        return (f"you predicted {value:+.1f} deg; the run measured {measured:+.1f} deg "
+                f"(straights {straights:+.1f}, short right corners {corners:+.1f})")
+    slips = {
+        "that is the counter-clockwise square's error: turning right, a short corner "
+        "leaves the chair pointing too far *left*, the same way the straights curve":
+            budget["counter_clockwise"],
+        "the sign: the straights still curve left (the right tyre is larger) and the "
+        "short right corners leave it pointing left too, so the error is positive":
+            -budget["clockwise"],
+        "only the straights: each of the three corners comes out short too":
+            straights,
+        "only the corners: the 3.5 straights curve left as well": corners,
+    }
+    for slip, wrong in slips.items():
+        if abs(value - wrong) <= 1.5:
+            raise NotYet(f"you predicted {value:+.1f} deg, the run measured "
+                         f"{measured:+.1f} deg: {slip}")
+    raise NotYet(f"you predicted {value:+.1f} deg; the run measured {measured:+.1f} deg. "
+                 f"Budget it as section 5 did: 3.5 straights of {budget['straight']:+.2f} "
+                 f"deg each, and 3 corners each {budget['corner_short']:.2f} deg short")

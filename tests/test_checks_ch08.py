@@ -186,3 +186,40 @@ def test_correction_factors_with_alpha_taken_as_degrees_is_not_yet(capsys):
 
 def test_correction_factors_not_written(capsys):
     assert_not_yet(ch08.correction_factors_check(not_written), capsys, "not written yet")
+
+
+# --- exercise 4: diagnosing a second chair ---------------------------------------------------
+
+
+def test_the_second_chairs_clusters_give_its_faults_back():
+    """Independent of the check's stored answer: UMBmark on the second chair's return
+    errors recovers a right encoder wheel smaller than the left and a narrower wheel base."""
+    from abcwc.estimation.umbmark import umbmark_corrections
+
+    cw, ccw = ch08.second_chair_return_errors()
+    found = umbmark_corrections(cw, ccw, 3.5, 0.44)
+    assert found.e_d == pytest.approx(0.992, abs=0.002)
+    assert found.e_b == pytest.approx(0.98, abs=0.01)
+
+
+def test_diagnosis_check_passes_the_right_reading(capsys):
+    assert_pass(ch08.diagnosis_check(lambda: {"wheels": "left larger",
+                                              "wheel base": "narrower"}), capsys)
+
+
+@pytest.mark.parametrize(("said", "fragment"), [
+    ({"wheels": "right larger", "wheel base": "narrower"}, "below 1"),      # E_d read upside down
+    ({"wheels": "left larger", "wheel base": "wider"}, "came out long"),    # alpha's sign
+    ({"wheels": "equal", "wheel base": "narrower"}, "type B"),
+    ({"wheels": "left larger", "wheel base": "nominal"}, "type A"),
+    ({"wheels": "left", "wheel base": "narrower"}, "say one of"),
+    ({"wheels": "left larger"}, "return"),
+])
+def test_diagnosis_check_refuses(said, fragment, capsys):
+    assert_not_yet(ch08.diagnosis_check(lambda: said), capsys, fragment)
+
+
+def test_diagnosis_check_refuses_the_stub_and_abcwcs_own(capsys):
+    assert_not_yet(ch08.diagnosis_check(not_written), capsys, "NotImplementedError")
+    assert_not_yet(ch08.diagnosis_check(ch08.reference_correction_factors), capsys,
+                   "abcwc's own")

@@ -13,7 +13,11 @@ Borenstein, Everett and Feng's report *Where am I?* (1996). Exercises:
 * ``correction_factors(alpha, radius, wheel_base)``: ``E_b = (pi/2) / (pi/2 - alpha)``
   (eqn 5.15), ``b_actual = E_b b`` (eqn 5.14), ``E_d = (R + b_actual/2) /
   (R - b_actual/2)`` (eqn 5.12) and the wheels' factors ``c_L = 2 / (E_d + 1)``,
-  ``c_R = 2 / (1/E_d + 1)``.
+  ``c_R = 2 / (1/E_d + 1)``;
+* ``diagnosis()``: a second chair, back from the workshop, whose return errors
+  (:func:`second_chair_return_errors`) the student reads: which of its encoder wheels is
+  the larger (or neither) and whether its effective wheel base is wider or narrower than
+  the nominal 440 mm (or neither), judged against the faults the simulator was given.
 
 Each ``reference_*`` function is the answer the notebook falls back on; it calls the
 library (:mod:`abcwc.estimation.umbmark`).
@@ -26,17 +30,21 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from abcwc.checks.report import checker, expect, expect_close, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
 from abcwc.estimation import umbmark
 from abcwc.params import default_params
 
 __all__ = [
+    "WHEEL_ANSWERS",
+    "WHEEL_BASE_ANSWERS",
     "alpha_beta_radius_check",
+    "diagnosis_check",
     "centres_check",
     "correction_factors_check",
     "reference_alpha_beta_radius",
     "reference_centres_of_gravity_and_emax",
     "reference_correction_factors",
+    "second_chair_return_errors",
     "worked_example",
 ]
 
@@ -212,3 +220,67 @@ def correction_factors_check(fn: Callable[[float, float, float], tuple]) -> str:
         worked_alpha, worked_radius, WHEEL_BASE)
     return (f"{len(cases)} cases; worked example E_b {e_b:.4f}, E_d {e_d:.4f}, "
             f"c = ({c_left:.5f}, {c_right:.5f})")
+
+
+# --- exercise 4: diagnose a second chair -----------------------------------------------------
+
+WHEEL_ANSWERS = ("left larger", "right larger", "equal")
+WHEEL_BASE_ANSWERS = ("wider", "narrower", "nominal")
+# The second chair's faults, which the notebook does not print: a new right encoder wheel
+# 0.8 % smaller than the left, and tyres that wore to a 2 % narrower effective wheel base.
+_SECOND_CHAIR = {"encoder_wheel_left": 1.0, "encoder_wheel_right": 0.992, "wheel_base": 0.98,
+                 "slip_std": 0.003}
+_SECOND_TRUTH = {"wheels": "left larger", "wheel base": "narrower"}
+
+
+def second_chair_return_errors(runs: int = 3, side: float = umbmark.THESIS_SIDE
+                               ) -> tuple[np.ndarray, np.ndarray]:
+    """The second chair's UMBmark return errors, ``runs`` squares of ``side`` m each way
+    round in an empty hall ((runs, 3) CW and CCW, as ``run_umbmark`` gives them)."""
+    import abcwc
+    from abcwc.experiments.umbmark_trials import run_umbmark
+    from abcwc.sim import ChairErrors
+    from abcwc.sim.world import box_world
+
+    hall = box_world(20, 20, centred=True, name="hall")
+    errors = ChairErrors(**_SECOND_CHAIR)
+    return run_umbmark(lambda seed: abcwc.connect(world=hall, seed=100 + seed, errors=errors,
+                                                  people=False), runs=runs, side=side)
+
+
+@checker("diagnosis")
+def diagnosis_check(diagnosis: Callable[[], dict]) -> str:
+    """``diagnosis()``: ``{"wheels": one of WHEEL_ANSWERS, "wheel base": one of
+    WHEEL_BASE_ANSWERS}`` against the faults the second chair was given."""
+    said = diagnosis()
+    expect(isinstance(said, dict) and set(said) == {"wheels", "wheel base"},
+           f'diagnosis() gave {format_value(said)}; return {{"wheels": ..., "wheel base": '
+           '...}}')
+    wheels, base = said["wheels"], said["wheel base"]
+    expect(wheels in WHEEL_ANSWERS, f'"wheels" is {wheels!r}; say one of {WHEEL_ANSWERS}')
+    expect(base in WHEEL_BASE_ANSWERS,
+           f'"wheel base" is {base!r}; say one of {WHEEL_BASE_ANSWERS}')
+    truth = _SECOND_TRUTH
+    wrong = []
+    if base != truth["wheel base"]:
+        if base == "wider":
+            wrong.append("the wheel base: a wider one makes every odometric turn come out "
+                         "short; this chair's turns came out long (alpha has the other "
+                         "sign), so its wheels are closer together than the software thinks")
+        else:
+            wrong.append("the wheel base: alpha is not zero, every corner comes out too long "
+                         "whichever way round (a type A error): the wheels are closer "
+                         "together than the software thinks")
+    if wheels != truth["wheels"]:
+        if wheels == "right larger":
+            wrong.append("the wheels: E_d = D_R / D_L comes out below 1, so the right encoder "
+                         "wheel is the smaller (a smaller encoder wheel counts more per "
+                         "metre, and the chair, driving what its odometry calls straight, "
+                         "curves towards that side)")
+        else:
+            wrong.append("the wheels: beta is not zero, every leg curves to the same side "
+                         "whichever way round (a type B error)")
+    if wrong:
+        raise NotYet("not yet on " + "; and ".join(wrong))
+    return ("right: the second chair's right encoder wheel is 0.8 % smaller than its left, "
+            "and its effective wheel base 2 % narrower than the nominal 440 mm")

@@ -227,16 +227,10 @@ class DwaPlanner:
                 best = int(np.argmin(np.where(near_best, samples[:, 0], np.inf)))
                 # the arc as checked: asking for a stop on it instead (v 0, the same
                 # turn rate) would tighten the turn as the wheels slow and swing a corner
-                # of the chair off the checked arc, into a wall beside it. But where the
-                # best way is the slowest the window holds, slowing is what helps most:
-                # ask for a stop, which the safety filter brakes at its full deceleration
-                # along the present arc (a target one window below, asked for again each
-                # cycle, it approaches gently and brakes at half that)
-                command = Twist(float(samples[best, 0]), float(samples[best, 1]))
-                if 0.0 < samples[best, 0] <= samples[:, 0].min() + 1e-9:
-                    command = Twist(0.0, 0.0)
-                return DwaResult(command, samples, poses, valid,
-                                 np.where(valid, cost, np.inf), best, evading, terms)
+                # of the chair off the checked arc, into a wall beside it
+                return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])),
+                                 samples, poses, valid, np.where(valid, cost, np.inf), best,
+                                 evading, terms)
             valid &= clear_of_people
         cost = np.where(valid, cost, np.inf)
         if not valid.any():

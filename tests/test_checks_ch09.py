@@ -182,3 +182,47 @@ def test_fused_step_returning_something_else_is_not_yet(capsys):
 
 def test_fused_step_not_written(capsys):
     assert_not_yet(ch09.fused_step_check(not_written), capsys, "not written yet")
+
+
+# --- exercise 4: measuring the pessimistic part's best standing time ---------------------------
+
+
+def test_best_standing_time_worked_by_hand():
+    """The pessimistic part: sigma_w 2.4 x the datasheet's, K = 1e-4 rad/s/sqrt(s), dt 0.02 s:
+    T* = sqrt(3) sigma_w sqrt(dt) / K."""
+    from abcwc.params import load_params
+
+    g = load_params(gyro="pessimistic").gyro
+    assert ch09.best_standing_time() == pytest.approx(
+        math.sqrt(3) * g.noise_std * math.sqrt(0.02) / 1e-4, rel=1e-9)
+    assert 6.0 < ch09.best_standing_time() < 9.0
+    assert 250 < ch09.best_standing_time("datasheet") < 350
+
+
+def test_best_window_check_passes_an_independent_measurement(capsys):
+    """Written without the notebook's helpers: the pessimistic part's model, 300 power-ups."""
+    from abcwc.params import load_params
+
+    g = load_params(gyro="pessimistic").gyro
+    rng = np.random.default_rng(3)
+    n, dt = 3000, 0.02
+    bias = rng.normal(0, g.bias_std, (300, 1)) + np.cumsum(
+        rng.normal(0, g.bias_walk_std * math.sqrt(dt), (300, n)), axis=1)
+    samples = bias + rng.normal(0, g.noise_std, (300, n))
+    windows = np.array([0.5, 1, 2, 4, 6, 8, 12, 16, 24, 40, 60])
+    rms = [np.sqrt(np.mean((samples[:, -int(w / dt):].mean(axis=1) - bias[:, -1]) ** 2))
+           for w in windows]
+    measured = float(windows[int(np.argmin(rms))])
+    assert_pass(ch09.best_window_check(lambda: measured), capsys)
+
+
+@pytest.mark.parametrize(("measured", "fragment"), [
+    (lambda: 300.0, "datasheet part"),
+    (lambda: 60.0, "kept falling"),
+    (lambda: 1.0, "too few samples"),
+    (lambda: -5.0, "one window length"),
+    (not_written, "NotImplementedError"),
+    (ch09.reference_estimate_bias, "abcwc's own"),
+])
+def test_best_window_check_refuses(measured, fragment, capsys):
+    assert_not_yet(ch09.best_window_check(measured), capsys, fragment)

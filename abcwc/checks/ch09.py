@@ -10,7 +10,10 @@ Exercises:
   starts at its timestamp);
 * ``fused_step(pose, d_left, d_right, gyro_z, dt, bias)``: one step of eqn 16, the
   heading turned by ``phi = (gyro_z - bias) dt`` and the position moved by the wheels'
-  mean travel ``(d_r + d_l) / 2`` along the step's mean heading ``theta + phi / 2``.
+  mean travel ``(d_r + d_l) / 2`` along the step's mean heading ``theta + phi / 2``;
+* ``measured_best_window()``: the pessimistic gyro's best standing time (s), measured by
+  experiment on simulated power-ups, judged against section 2's formula
+  ``T* = sqrt(3) sigma_w sqrt(dt) / K``.
 
 Each ``reference_*`` answer, the one the notebook falls back on, is the library's own
 (:mod:`abcwc.estimation.gyro`).
@@ -36,6 +39,8 @@ from abcwc.params import default_params
 from abcwc.types import Pose2D, Twist
 
 __all__ = [
+    "best_standing_time",
+    "best_window_check",
     "bias_check",
     "fused_step_check",
     "heading_check",
@@ -307,3 +312,42 @@ def fused_step_check(fn: Callable[..., Pose2D]) -> str:
 def _number(value: object) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
         value, bool)
+
+
+# --- exercise 4: measure the pessimistic part's best standing time ----------------------------
+
+
+def best_standing_time(gyro: str = "pessimistic") -> float:
+    """Section 2's ``T* = sqrt(3) sigma_w sqrt(dt) / K`` (s) for a gyro of
+    ``load_params(gyro=...)``: the window whose bias estimate errs least."""
+    from abcwc.params import load_params
+
+    p = load_params(gyro=gyro)
+    return math.sqrt(3) * p.gyro.noise_std * math.sqrt(p.control_period) / p.gyro.bias_walk_std
+
+
+@checker("measurement")
+def best_window_check(measured: Callable[[], float]) -> str:
+    """The measured best window (s) against the formula: within a factor of two (the bowl
+    is shallow near its bottom, and 400 power-ups measure it only so finely)."""
+    value = measured()
+    expect(isinstance(value, (int, float, np.floating)) and math.isfinite(float(value))
+           and value > 0, f"measured_best_window() gave {format_value(value)}; return one "
+           "window length in seconds")
+    value = float(value)
+    best, datasheet = best_standing_time("pessimistic"), best_standing_time("datasheet")
+    if best / 2 <= value <= 2 * best:
+        return (f"you measured {value:g} s; the formula gives T* = {best:.1f} s for the "
+                f"pessimistic part (the datasheet part's is {datasheet:.0f} s)")
+    if datasheet / 2 <= value <= 2 * datasheet:
+        raise NotYet(f"{value:g} s is the datasheet part's T* ({datasheet:.0f} s): measure the "
+                     "pessimistic part, load_params(gyro=\"pessimistic\").gyro, as gyro_model's "
+                     "model")
+    if value > 2 * best:
+        raise NotYet(f"you measured {value:g} s, the formula gives {best:.1f} s: the error kept "
+                     "falling with longer windows. Compare each estimate with the bias at the "
+                     "window's end (when the chair drives off), not with the turn-on bias, and "
+                     "try windows from half a second up")
+    raise NotYet(f"you measured {value:g} s, the formula gives {best:.1f} s: a shorter window "
+                 "than T* averages too few samples; is the error an RMS over all power-ups, "
+                 "and the window the last T seconds?")

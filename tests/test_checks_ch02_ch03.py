@@ -233,3 +233,28 @@ def test_wander_not_written(capsys):
             return not_written(frame)
 
     assert_not_yet(ch03.wander_check(Stub), capsys, "not written yet")
+
+
+# --- chapter 02, exercise 3: predicting the coast after a stop ---------------------------------
+
+MEASURED_COAST = 0.301  # m: the ideal chair after a stop at 1.0 m/s, as the notebook measures
+
+
+def test_coast_prediction_passes_the_step_responses_reading(capsys):
+    dead_time, tau = 0.040 + 0.020, 0.25   # the motor controller's delay and one period; the lag
+    assert_pass(ch02.coast_prediction_check(lambda: 1.0 * (dead_time + tau), MEASURED_COAST),
+                capsys)
+
+
+@pytest.mark.parametrize(("predicted", "fragment"), [
+    (lambda: 0.25, "only the lag"),
+    (lambda: 0.06, "only the dead time"),
+    (lambda: 1.31, "settling time"),
+    (lambda: 0.185, "half of it"),
+    (lambda: 0.9, "add up the distance"),
+    (lambda: -0.3, "one distance"),
+    (not_written, "NotImplementedError"),
+    (ch02.turn_value_check, "abcwc's own"),
+])
+def test_coast_prediction_refuses(predicted, fragment, capsys):
+    assert_not_yet(ch02.coast_prediction_check(predicted, MEASURED_COAST), capsys, fragment)

@@ -6,21 +6,32 @@
 * :func:`twist_to_pots_check` — the calibrated velocity controller, ``(v, w) ->
   PotCommand``, the inverse of the motor controller's model, compared with
   :func:`abcwc.control.twist_to_pot_command` over a sweep of speeds and turn rates.
+* :func:`coast_prediction_check` — a distance written down *before* the run that
+  measures it: how far the chair still rolls after a stop sent at 1.0 m/s, from the
+  step response's dead time and lag, judged against the run.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import checker, expect, expect_close, expect_equal, format_value
+from abcwc.checks.report import (
+    NotYet,
+    checker,
+    expect,
+    expect_close,
+    expect_equal,
+    format_value,
+)
 from abcwc.control.pots import turn_value
 from abcwc.control.velocity import twist_to_pot_command
 from abcwc.params import default_params
 from abcwc.types import Twist
 
-__all__ = ["TURN_VALUES", "turn_value_check", "twist_to_pots_check"]
+__all__ = ["TURN_VALUES", "coast_prediction_check", "turn_value_check", "twist_to_pots_check"]
 
 # (angle in degrees, + = left; pot-scale value; where it comes from)
 TURN_VALUES = (
@@ -98,3 +109,35 @@ def twist_to_pots_check(fn: Callable[[float, float], object]) -> str:
         exact += got == (expected.fb, expected.lr)
     return (f"{len(cases)} commands within ±1 byte of abcwc's controller "
             f"({exact} of them exactly equal)")
+
+
+@checker("prediction")
+def coast_prediction_check(predicted: Callable[[], float], measured: float,
+                           speed: float = 1.0, dead_time: float = 0.06, tau: float = 0.25
+                           ) -> str:
+    """The distance (m) the chair rolls after a stop at ``speed`` m/s, written before the
+    run, against the run's ``measured`` distance; ``dead_time`` and ``tau`` (s) are the
+    step response's, for naming the slips."""
+    value = predicted()
+    expect(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0,
+           f"predicted_coast() gave {format_value(value)}; write one distance in metres")
+    if abs(value - measured) <= 0.04:
+        return (f"you predicted {value:.2f} m; the chair rolled {measured:.3f} m after the "
+                f"stop at {speed:g} m/s")
+    slips = {
+        "only the lag: the command also waits the dead time before the wheels hear it":
+            speed * tau,
+        "only the dead time: after it the wheels still take their lag to slow down":
+            speed * dead_time,
+        "that is the settling time (L + 5 tau) times the speed; the distance is the "
+        "area between the step and the response, v (L + tau)": speed * (dead_time + 5 * tau),
+        "half of it: the response is an exponential, not a straight ramp, and its area "
+        "behind the step is v tau, not v tau / 2": speed * (dead_time + tau / 2),
+    }
+    for slip, wrong in slips.items():
+        if abs(value - wrong) <= 0.02:
+            raise NotYet(f"you predicted {value:.2f} m, the chair rolled {measured:.3f} m: "
+                         f"{slip}")
+    raise NotYet(f"you predicted {value:.2f} m, the chair rolled {measured:.3f} m: at "
+                 f"{speed:g} m/s the wheels run on through the dead time and then slow with "
+                 "the lag; add up the distance each part covers")

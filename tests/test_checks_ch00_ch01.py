@@ -208,3 +208,40 @@ def test_clockwise_prediction_passes_an_independent_budget(capsys):
 ])
 def test_clockwise_prediction_refuses(predicted, fragment, capsys):
     assert_not_yet(CLOCKWISE_CHECK, predicted, capsys, fragment)
+
+
+# --- chapter 01, exercise 4: measuring one corner --------------------------------------------
+
+
+def student_corners():
+    """Written independently: turn with lr 64 for 2 s on each chair, stop, and read the
+    true heading change after 2 s of rest."""
+    import abcwc
+
+    turned = []
+    for errors in ("worn", "ideal"):
+        chair = abcwc.connect(world="lab", seed=3, errors=errors, start="centre")
+        start = chair.pose.theta
+        chair.drive(PotCommand(128, 64), 2.0)
+        chair.drive(PotCommand(128, 128), 2.0)
+        turned.append(math.degrees(math.remainder(chair.pose.theta - start, 2 * math.pi)))
+    return tuple(turned)
+
+
+def test_corners_check_passes_an_independent_measurement(capsys):
+    assert_pass(ch01.corners_check, student_corners, capsys)
+
+
+@pytest.mark.parametrize(("measured", "fragment"), [
+    (lambda: (1.545, 1.583), "radians"),
+    (lambda: (90.7, 90.7), "errors=\"worn\""),          # the ideal chair twice
+    (lambda: (93.4, 90.7), "wider wheel base"),          # x E_b instead of / E_b
+    (lambda: (44.0, 45.3), "lasts 2 s"),                  # a 1 s corner
+    (lambda: (75.0, 76.6), "come to rest"),              # read before the lag had run out
+    (lambda: (88.5, 86.0), "omega x 2 s"),
+    (lambda: 88.5, "two angles"),
+    (not_written, "NotImplementedError"),
+    (ch01.reference_square_sequence, "abcwc's own"),
+])
+def test_corners_check_refuses(measured, fragment, capsys):
+    assert_not_yet(ch01.corners_check, measured, capsys, fragment)

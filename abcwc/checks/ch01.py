@@ -7,6 +7,9 @@ Exercises:
   forward, reverse, left, right and stop;
 * ``square_sequence(t)``: the open-loop square of appendix A.3 as a function of time:
   forward 5 s, left 2 s, three times, then forward 2.5 s and stop;
+* ``measured_corners()``: one corner of the square measured on the simulated chairs
+  (LEFT for 2 s from standstill, then stopped): the degrees turned by the worn chair and
+  by the ideal one, against the motor model and the worn chair's faults;
 * ``predicted_clockwise_heading_error()``: a number written down *before* the clockwise
   square is driven: the worn chair's heading error at its end (worn minus ideal, degrees,
   positive to the left), from the error budget the chapter works out for the
@@ -37,6 +40,7 @@ __all__ = [
     "THESIS_EQN1_VALUES",
     "clockwise_budget",
     "clockwise_prediction_check",
+    "corners_check",
     "pot_mapping",
     "reference_square_sequence",
     "square_phase",
@@ -213,7 +217,51 @@ def _check_sample(fn: Callable[[float], PotCommand], t: float, phase: str, where
     seen[phase] = pair
 
 
-# --- exercise 4: predict the clockwise square's heading error -------------------------------
+# --- exercise 4: measure one corner -------------------------------------------------------
+
+
+@checker("measurement")
+def corners_check(measured: Callable[[], tuple[float, float]]) -> str:
+    """``measured()`` = (worn, ideal) degrees turned by one 2 s corner, against the motor
+    model (ideal: ``omega x 2 s``) and the worn chair's budget."""
+    value = measured()
+    try:
+        worn, ideal = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise NotYet(f"measured_corners() gave {format_value(value)}; return two angles in "
+                     "degrees: (worn chair, ideal chair)") from None
+    expect(math.isfinite(worn) and math.isfinite(ideal),
+           f"measured ({worn}, {ideal}); both must be finite numbers of degrees")
+    budget = clockwise_budget()
+    p = default_params()
+    model = math.degrees(-pot_byte_to_deflection(LEFT_LR, p) * p.max_turn_rate * 2.0)
+    expected_worn = model - budget["corner_short"]
+    if max(abs(worn), abs(ideal)) < 2 * math.pi + 0.1 and abs(ideal) > 1.0:
+        raise NotYet(f"({worn:.2f}, {ideal:.2f}) look like radians; the check wants degrees "
+                     f"(the ideal corner is {model:.1f} deg)")
+    if abs(ideal - model) > 0.5:
+        if abs(ideal - model / 2) < 1.0:
+            raise NotYet(f"the ideal chair turned {ideal:.1f} deg by your measurement, half "
+                         f"the model's {model:.1f}: the corner's command lasts 2 s")
+        unfinished = model * (2.0 - p.command_delay - 0.02 - p.motor_time_constant) / 2.0
+        if abs(ideal - unfinished) < 2.0:
+            raise NotYet(f"the ideal chair turned {ideal:.1f} deg by your measurement, the "
+                         f"model says {model:.1f}: read the heading once the chair has come "
+                         "to rest; when the command ends, the wheels still lag behind it")
+        raise NotYet(f"the ideal chair turned {ideal:.1f} deg by your measurement, the model "
+                     f"says {model:.1f} (omega x 2 s): measure the heading change from the "
+                     "simulator's true pose, unwrapped, after the chair has stopped")
+    if abs(worn - expected_worn) > 0.7:
+        if abs(worn - ideal) < 0.3:
+            raise NotYet(f"the worn chair turned {worn:.1f} deg, as much as the ideal: was it "
+                         "the worn chair (errors=\"worn\")?")
+        raise NotYet(f"the worn chair turned {worn:.1f} deg; its wider wheel base and larger "
+                     f"tyre give {expected_worn:.1f}")
+    return (f"worn {worn:.1f} deg, ideal {ideal:.1f} deg: each of the worn chair's corners "
+            f"is {ideal - worn:.1f} deg short")
+
+
+# --- exercise 5: predict the clockwise square's heading error -------------------------------
 
 
 def clockwise_budget() -> dict[str, float]:

@@ -226,3 +226,32 @@ def test_best_window_check_passes_an_independent_measurement(capsys):
 ])
 def test_best_window_check_refuses(measured, fragment, capsys):
     assert_not_yet(ch09.best_window_check(measured), capsys, fragment)
+
+
+# --- exercise (predict, then run): the five laps' end heading errors ----------------------------
+
+LAPS = dict(wheels=28.5, raw_gyro=46.1, bias=0.00407, driving=195.0)   # as the notebook measures
+
+
+def lap_check(predicted):
+    return ch09.end_heading_prediction_check(predicted, **LAPS)
+
+
+def test_lap_prediction_passes_an_independent_reading(capsys):
+    wheels = math.degrees((1.03 / 1.0123 - 1) * 10 * math.pi)   # 1.7 % of five turns
+    raw = math.degrees(0.00407 * 195.0)
+    assert_pass(lap_check(lambda: (wheels, raw)), capsys)
+
+
+@pytest.mark.parametrize(("predicted", "fragment"), [
+    (lambda: (54.0, 45.5), "3 % too large"),              # the wheel base alone
+    (lambda: (-30.0, 45.5), "wheels' sign"),
+    (lambda: (0.52, 0.79), "radians"),
+    (lambda: (30.0, -45.5), "raw gyro's sign"),
+    (lambda: (30.0, 0.0), "adds its bias"),
+    (lambda: 30.0, "two angles"),
+    (not_written, "NotImplementedError"),
+    (ch09.reference_estimate_bias, "abcwc's own"),
+])
+def test_lap_prediction_refuses(predicted, fragment, capsys):
+    assert_not_yet(lap_check(predicted), capsys, fragment)

@@ -11,6 +11,9 @@ Exercises:
 * ``fused_step(pose, d_left, d_right, gyro_z, dt, bias)``: one step of eqn 16, the
   heading turned by ``phi = (gyro_z - bias) dt`` and the position moved by the wheels'
   mean travel ``(d_r + d_l) / 2`` along the step's mean heading ``theta + phi / 2``;
+* ``predicted_end_heading_errors()``: two numbers written down *before* the five laps are
+  plotted: the wheels' and the raw gyro's heading error at the end (degrees), from the
+  worn chair's geometry and the bias the first seconds gave;
 * ``measured_best_window()``: the pessimistic gyro's best standing time (s), measured by
   experiment on simulated power-ups, judged against section 2's formula
   ``T* = sqrt(3) sigma_w sqrt(dt) / K``.
@@ -39,7 +42,9 @@ from abcwc.params import default_params
 from abcwc.types import Pose2D, Twist
 
 __all__ = [
+    "END_TURN",
     "best_standing_time",
+    "end_heading_prediction_check",
     "best_window_check",
     "bias_check",
     "fused_step_check",
@@ -351,3 +356,60 @@ def best_window_check(measured: Callable[[], float]) -> str:
     raise NotYet(f"you measured {value:g} s, the formula gives {best:.1f} s: a shorter window "
                  "than T* averages too few samples; is the error an RMS over all power-ups, "
                  "and the window the last T seconds?")
+
+
+# --- exercise 4: predict the five laps' heading errors ---------------------------------------
+
+END_TURN = 10 * math.pi
+"""rad: five anticlockwise laps of the lab."""
+
+
+@checker("prediction")
+def end_heading_prediction_check(predicted: Callable[[], tuple[float, float]],
+                                 wheels: float, raw_gyro: float, bias: float,
+                                 driving: float) -> str:
+    """(wheels, raw gyro) degrees written before the plots, against the measured end
+    errors (``wheels``, ``raw_gyro``, degrees); ``bias`` (rad/s) and ``driving`` (s, the
+    time after the still start) are what the notebook printed, for naming the slips."""
+    value = predicted()
+    try:
+        guess_wheels, guess_raw = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise NotYet(f"predicted_end_heading_errors() gave {format_value(value)}; return two "
+                     "angles in degrees: (wheels, raw gyro)") from None
+    expect(math.isfinite(guess_wheels) and math.isfinite(guess_raw),
+           f"predicted ({guess_wheels}, {guess_raw}); both must be finite degrees")
+    from abcwc.sim import ChairErrors
+
+    worn = ChairErrors.worn()
+    encoder = (worn.encoder_wheel_left + worn.encoder_wheel_right) / 2
+    too_large = worn.wheel_base / encoder - 1  # every turn counted this much too large
+    raw_expected = math.degrees(bias * driving)
+    notes = []
+    if abs(guess_raw - raw_gyro) > 4.0:
+        if abs(guess_raw - math.radians(raw_gyro)) < 0.1:
+            notes.append("the raw gyro's error is in radians; the check wants degrees")
+        elif abs(guess_raw + raw_gyro) < 4.0:
+            notes.append("the raw gyro's sign: a positive bias adds to every reading, so "
+                         "its heading runs ahead, to the left")
+        else:
+            notes.append(f"the raw gyro: it adds its bias, {bias:.5f} rad/s, in every second "
+                         f"of the {driving:.0f} s of driving: {raw_expected:.1f} deg")
+    if abs(guess_wheels - wheels) > 5.0:
+        if abs(guess_wheels - math.radians(wheels)) < 0.1:
+            notes.append("the wheels' error is in radians; the check wants degrees")
+        elif abs(guess_wheels - math.degrees((worn.wheel_base - 1) * END_TURN)) < 5.0:
+            notes.append("the wheels: the 3 % wider wheel base makes the odometry see each "
+                         "turn 3 % too large, but the encoder wheels count 1.2 % short, which "
+                         f"shrinks what they see: {100 * too_large:.1f} % in all")
+        elif abs(guess_wheels + wheels) < 5.0:
+            notes.append("the wheels' sign: the odometry sees every turn too *large*, and "
+                         "all the turns are to the left")
+        else:
+            notes.append(f"the wheels: five laps turn {END_TURN:.1f} rad, and the worn "
+                         f"odometry counts every turn about {100 * too_large:.1f} % too large")
+    if notes:
+        raise NotYet(f"you predicted {guess_wheels:.1f} and {guess_raw:.1f} deg, the drive "
+                     f"ended {wheels:.1f} and {raw_gyro:.1f} deg off: " + "; ".join(notes))
+    return (f"you predicted {guess_wheels:.1f} deg for the wheels and {guess_raw:.1f} deg "
+            f"for the raw gyro; the drive ended {wheels:.1f} and {raw_gyro:.1f} deg off")

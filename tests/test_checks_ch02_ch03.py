@@ -258,3 +258,32 @@ def test_coast_prediction_passes_the_step_responses_reading(capsys):
 ])
 def test_coast_prediction_refuses(predicted, fragment, capsys):
     assert_not_yet(ch02.coast_prediction_check(predicted, MEASURED_COAST), capsys, fragment)
+
+
+# --- chapter 03: predicting the sonar at a wall ----------------------------------------------
+
+AT_THE_WALL = dict(reading=0.300, true_distance=0.05)   # as the notebook's run measures
+
+
+def wall_check(predicted):
+    return ch03.sonar_prediction_check(predicted, **AT_THE_WALL)
+
+
+def test_sonar_prediction_passes_the_geometry_and_the_datasheet(capsys):
+    p = default_params()
+    front = p.length - p.axle_to_rear
+    assert_pass(wall_check(lambda: (p.sonar.min_range, front - p.sonar.mount[0], False)), capsys)
+
+
+@pytest.mark.parametrize(("predicted", "fragment"), [
+    (lambda: (0.05, 0.05, False), "minimum range"),      # the truth, not what it reports
+    (lambda: (0.30, 0.45, False), "their difference"),   # the front edge's offset
+    (lambda: (0.30, 0.05, True), "never gives"),
+    (lambda: (0.30, 0.20, False), "from the wall"),
+    (lambda: (0.30, 0.05, "no"), "the third answer"),
+    (lambda: 0.30, "return (reading"),
+    (not_written, "NotImplementedError"),
+    (ch03.table7_turn_angle, "abcwc's own"),
+])
+def test_sonar_prediction_refuses(predicted, fragment, capsys):
+    assert_not_yet(wall_check(predicted), capsys, fragment)

@@ -2,6 +2,9 @@
 
 * :func:`turn_angle_check` — table 7: the turn angle (degrees) for a sonar distance
   (metres), ``0.0`` beyond 1 m and ``None`` (reverse) closer than 0.2 m.
+* :func:`sonar_prediction_check` — three answers written down *before* the chair creeps
+  into a wall: what the sonar reads when the bumper touches, how far the sonar then really
+  is from the wall, and whether table 7's reverse row fires.
 * :func:`wander_check` — a wander controller drives 90 s in each of three scenes the
   notebook never shows, without touching anything, without standing still and without
   going round in circles.
@@ -14,7 +17,7 @@ import inspect
 import math
 from collections.abc import Callable
 
-from abcwc.checks.report import checker, expect, expect_close, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
 from abcwc.control.pots import AvoidAction, sonar_turn_angle
 from abcwc.types import SensorFrame
 
@@ -25,6 +28,7 @@ __all__ = [
     "WANDER_MIN_DISTANCE",
     "WANDER_RUNS",
     "WANDER_SECONDS",
+    "sonar_prediction_check",
     "table7_turn_angle",
     "turn_angle_check",
     "wander_check",
@@ -158,3 +162,52 @@ def wander_check(make_controller: object) -> str:
         cells_total += cells
     return (f"{len(WANDER_RUNS)} scenes the notebook never showed, {WANDER_SECONDS:g} s each: "
             f"{total:.1f} m driven, {cells_total} square metres visited, 0 collisions")
+
+
+# --- predict, then run: the sonar at a wall -------------------------------------------------
+
+
+@checker("prediction")
+def sonar_prediction_check(predicted: Callable[[], tuple], reading: float,
+                           true_distance: float) -> str:
+    """``predicted()`` = (sonar reading at the touch (m), the sonar's true distance to the
+    wall then (m), whether table 7's reverse row fires), against the run's ``reading`` and
+    ``true_distance`` and the chair's geometry."""
+    from abcwc.params import default_params
+
+    value = predicted()
+    try:
+        guess_reading, guess_true, reverse = value
+        guess_reading, guess_true = float(guess_reading), float(guess_true)
+    except (TypeError, ValueError):
+        raise NotYet(f"predicted_at_the_wall() gave {format_value(value)}; return (reading in "
+                     "m, true distance in m, True or False)") from None
+    expect(isinstance(reverse, bool), f"the third answer is {reverse!r}: True if table 7's "
+           "reverse row fires, False if not")
+    p = default_params()
+    front = p.length - p.axle_to_rear
+    notes = []
+    if abs(guess_true - true_distance) > 0.015:
+        if abs(guess_true - front) < 0.015 or abs(guess_true - p.sonar.mount[0]) < 0.015:
+            notes.append(f"the true distance: the bumper (front edge, {front:.2f} m ahead of "
+                         f"the axle) touches the wall and the sonar sits {p.sonar.mount[0]:.2f} "
+                         "m ahead of the axle; the gap is their difference")
+        else:
+            notes.append(f"the true distance: when the front edge ({front:.2f} m ahead of the "
+                         f"axle) touches, the sonar ({p.sonar.mount[0]:.2f} m ahead) is "
+                         f"{front - p.sonar.mount[0]:.2f} m from the wall")
+    if abs(guess_reading - reading) > 0.015:
+        if abs(guess_reading - guess_true) < 0.015 or guess_reading < p.sonar.min_range:
+            notes.append(f"the reading: nothing nearer than the MB1013's minimum range "
+                         f"({p.sonar.min_range:.2f} m, table 3) is reported as it is; the "
+                         "sensor reports its minimum instead")
+        else:
+            notes.append(f"the reading: the run measured {reading:.2f} m")
+    if reverse:
+        notes.append("the reverse row needs a reading below 0.2 m, which this sonar never "
+                     "gives")
+    if notes:
+        raise NotYet(f"you predicted {guess_reading:.2f} m read, {guess_true:.2f} m true, "
+                     f"reverse {reverse}: " + "; ".join(notes))
+    return (f"the sonar read {reading:.2f} m with the wall {true_distance * 100:.0f} cm away, "
+            "and table 7 never said reverse: as you predicted")

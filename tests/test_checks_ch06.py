@@ -161,3 +161,48 @@ def test_integrate_arcs_without_the_start_row_is_not_yet(capsys):
     result = ch06.integrate_arcs_check(
         lambda *args: ch06.reference_integrate_arcs(*args)[1:])
     assert_not_yet(result, capsys, "shape (50, 3), expected (51, 3)", "N + 1 poses")
+
+
+# --- predict, then run: euler at 0.5 s ---------------------------------------------------------
+
+EULER = dict(measured=0.577, at_20_ms=0.0233)   # % of the distance, as the notebook measures
+
+
+def test_euler_prediction_passes_first_order_scaling(capsys):
+    assert_pass(ch06.euler_prediction_check(lambda: 0.0233 * 0.5 / 0.02, **EULER), capsys)
+
+
+@pytest.mark.parametrize(("predicted", "fragment"), [
+    (lambda: 0.0233, "error at 20 ms"),
+    (lambda: 0.0233 * 625, "square of the period"),
+    (lambda: 0.00583, "as a fraction"),
+    (lambda: 2.0, "first order"),
+    (lambda: float("inf"), "one percentage"),
+    (not_written, "NotImplementedError"),
+    (ch06.reference_wheel_travel, "abcwc's own"),
+])
+def test_euler_prediction_refuses(predicted, fragment, capsys):
+    assert_not_yet(ch06.euler_prediction_check(predicted, **EULER), capsys, fragment)
+
+
+# --- diagnose: the faulty log --------------------------------------------------------------------
+
+
+def test_the_faulty_log_mirrors_the_true_path():
+    """Independent of the check's stored answer: odometry from the log's counts turns the
+    other way at every step (its headings are the truth's negated) over the true distance."""
+    log = ch06.faulty_log()
+    from abcwc.estimation import odometry_from_log
+
+    poses = odometry_from_log(log, method="exact")
+    assert np.allclose(poses[:, 2], -log.pose[:, 2], atol=0.01)
+    assert np.allclose(poses[:, 1], -log.pose[:, 1], atol=0.02)
+
+
+def test_diagnosis_check(capsys):
+    assert_pass(ch06.diagnosis_check(lambda: "channels swapped"), capsys)
+    assert_not_yet(ch06.diagnosis_check(lambda: "left counts backwards"), capsys, "spin")
+    assert_not_yet(ch06.diagnosis_check(lambda: "right counts backwards"), capsys, "spin")
+    assert_not_yet(ch06.diagnosis_check(lambda: "swapped"), capsys, "say one of")
+    assert_not_yet(ch06.diagnosis_check(not_written), capsys, "NotImplementedError")
+    assert_not_yet(ch06.diagnosis_check(ch06.faulty_log), capsys, "abcwc's own")

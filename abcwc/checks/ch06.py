@@ -13,6 +13,11 @@ Exercises:
 
 The ``reference_*`` answers the notebook falls back on are the library's own
 (:mod:`abcwc.estimation.odometry`).
+* ``predicted_euler_error()``: a number written down *before* the longer periods are
+  run: euler's end error (% of the distance) at a 0.5 s period, from its error at 20 ms
+  and the order the text derived;
+* ``diagnosis()``: which fault a log's encoder counts have (the channels swapped, or one
+  of them counting backwards), judged against the fault put into it.
 """
 
 from __future__ import annotations
@@ -30,6 +35,10 @@ from abcwc.params import default_params
 from abcwc.types import Pose2D
 
 __all__ = [
+    "FAULTS",
+    "diagnosis_check",
+    "euler_prediction_check",
+    "faulty_log",
     "integrate_arcs_check",
     "odometry_step_check",
     "reference_integrate_arcs",
@@ -285,3 +294,67 @@ def integrate_arcs_check(fn: Callable[..., np.ndarray]) -> str:
         expect_close(got, expected, what=what, rtol=0.0, atol=1e-9, ref="exact arcs")
     return (f"{len(cases)} logs match: a line, a spin, three arcs on their circles to "
             "1e-9 m, 400 random steps")
+
+
+# --- predict, then run: euler at a longer period ---------------------------------------------
+
+
+@checker("prediction")
+def euler_prediction_check(predicted: Callable[[], float], measured: float,
+                           at_20_ms: float) -> str:
+    """Euler's end error at 0.5 s (% of the distance) written before the run, against the
+    run's ``measured`` value; ``at_20_ms`` is the notebook's error at 20 ms, for the
+    slips (euler's error grows in proportion to the period: 25 times from 20 ms)."""
+    value = predicted()
+    expect(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0,
+           f"predicted_euler_error() gave {format_value(value)}; write one percentage")
+    if abs(value - measured) <= 0.15 * measured:
+        return (f"you predicted {value:.3f} %; at 0.5 s euler ended {measured:.3f} % off "
+                f"({measured / at_20_ms:.0f} times its {at_20_ms:.3f} % at 20 ms)")
+    slips = {
+        "that is its error at 20 ms: each step's error grows with the period, and the "
+        "steps are fewer, but they all push the same way": at_20_ms,
+        "that is the square of the period's ratio: a step's error d phi / 2 grows with the "
+        "square, but there are 25 times fewer steps": at_20_ms * 25**2,
+        "that is the percentage as a fraction: the check wants percent": at_20_ms * 25 / 100,
+    }
+    for slip, wrong in slips.items():
+        if abs(value - wrong) <= 0.15 * wrong:
+            raise NotYet(f"you predicted {value:.3f} %, euler ended {measured:.3f} % off: "
+                         f"{slip}")
+    raise NotYet(f"you predicted {value:.3f} %, euler ended {measured:.3f} % off. It is "
+                 "first order: its end error is in proportion to the period")
+
+
+# --- diagnose: a log with a fault in its counts ----------------------------------------------
+
+FAULTS = ("channels swapped", "left counts backwards", "right counts backwards")
+_FAULT = "channels swapped"
+
+
+def faulty_log():  # noqa: ANN201 - a RunLog, imported lazily
+    """20 s of chapter 06's curvy test drive on the ideal chair in an empty hall, its
+    encoder counts spoiled by one of :data:`FAULTS` (which one is the exercise)."""
+    import dataclasses
+
+    import abcwc
+    from abcwc.sim.world import box_world
+    from abcwc.types import Twist
+
+    hall = box_world(120, 120, centred=True, name="hall")
+    chair = abcwc.connect(world=hall, errors="ideal", seed=6, people=False)
+    log = chair.run(lambda frame: Twist(0.8, 0.35 * math.sin(frame.t / 3.0) + 0.1), 20.0)
+    return dataclasses.replace(log, ticks=log.ticks[:, ::-1].copy())
+
+
+@checker("diagnosis")
+def diagnosis_check(diagnosis: Callable[[], str]) -> str:
+    """``diagnosis()`` names the fault of :func:`faulty_log`."""
+    said = diagnosis()
+    expect(said in FAULTS, f"diagnosis() gave {format_value(said)}; say one of {FAULTS}")
+    if said == _FAULT:
+        return ("right: the channels are swapped. The odometry drives the right distance "
+                "but every turn the other way, a mirror image of the true path")
+    raise NotYet(f"not {said!r}: with one wheel counting backwards the mean travel would be "
+                 "near zero and the odometry would spin on the spot; this log's odometry "
+                 "drives the right distance. Compare its turns with the true path's")

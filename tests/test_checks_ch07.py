@@ -203,3 +203,30 @@ def test_law_without_the_braking_limit_is_not_yet(capsys):
 
 def test_law_not_written(capsys):
     assert_not_yet(ch07.proportional_command_check(not_written), capsys, "not written yet")
+
+
+# --- predict, then run: a 2 cm tolerance -------------------------------------------------------
+
+TIGHT_RUN = dict(turn_then_drive=0.104, proportional=0.011)   # m, as the notebook measures
+
+
+def tight_check(predicted):
+    return ch07.tight_prediction_check(predicted, **TIGHT_RUN)
+
+
+def test_tight_prediction_passes_a_stopping_distance_reading(capsys):
+    roll_out = 0.5 * (0.06 + 0.25) * 0.8     # 0.5 m/s through the delay and most of the lag
+    assert_pass(tight_check(lambda: (roll_out, 0.01)), capsys)
+
+
+@pytest.mark.parametrize(("predicted", "fragment"), [
+    (lambda: (0.02, 0.02), "cannot stop within 2 cm"),   # both keep their tolerance
+    (lambda: (0.5, 0.01), "one roll-out"),
+    (lambda: (0.1, 0.1), "slows down as it closes in"),
+    (lambda: (0.1, -0.01), "distances in m"),
+    (lambda: 0.1, "two distances"),
+    (not_written, "NotImplementedError"),
+    (ch07.reference_proportional_command, "abcwc's own"),
+])
+def test_tight_prediction_refuses(predicted, fragment, capsys):
+    assert_not_yet(tight_check(predicted), capsys, fragment)

@@ -13,6 +13,8 @@ Exercises:
 
 The ``reference_*`` answers the notebook falls back on are the library's own
 (:mod:`abcwc.behaviours.landmark`).
+* ``predicted_tight_errors()``: two distances written down *before* both controllers are
+  asked for 2 cm: each one's mean final error (m), judged against the run.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from abcwc.checks.report import (
 from abcwc.types import Pose2D
 
 __all__ = [
+    "tight_prediction_check",
     "THESIS_MACHINE",
     "distance_and_bearing_check",
     "proportional_command_check",
@@ -207,3 +210,37 @@ def proportional_command_check(fn: Callable[..., Any]) -> str:
     example = reference_proportional_command(2.0, 0.2, **_DEFAULTS)
     return (f"{len(cases)} commands match, e.g. 2 m away and 0.2 rad off: "
             f"v {example.v:.3f} m/s, w {example.w:.3f} rad/s")
+
+
+# --- predict, then run: a 2 cm tolerance -------------------------------------------------------
+
+
+@checker("prediction")
+def tight_prediction_check(predicted: Callable[[], tuple[float, float]],
+                           turn_then_drive: float, proportional: float) -> str:
+    """(turn-then-drive, proportional) mean final errors (m) at a 2 cm tolerance, written
+    before the run, against the run's."""
+    value = predicted()
+    try:
+        guess_ttd, guess_prop = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise NotYet(f"predicted_tight_errors() gave {format_value(value)}; return two "
+                     "distances in m: (turn-then-drive, proportional)") from None
+    expect(all(math.isfinite(g) and g >= 0 for g in (guess_ttd, guess_prop)),
+           f"predicted ({guess_ttd}, {guess_prop}); both are distances in m, >= 0")
+    notes = []
+    if guess_ttd < 0.5 * turn_then_drive:
+        notes.append("turn-then-drive cannot stop within 2 cm from 0.5 m/s: it rolls on "
+                     "0.1-0.15 m after its stop command (the paragraph above), so it ends "
+                     "far outside its tolerance")
+    elif guess_ttd > 3 * turn_then_drive:
+        notes.append("turn-then-drive: it overshoots, but it still comes to rest after the "
+                     "stop, one roll-out from where it stopped")
+    if abs(guess_prop - proportional) > 0.02:
+        notes.append("the proportional law slows down as it closes in (v = k_rho rho), so it "
+                     "stops about where it means to, inside its tolerance")
+    if notes:
+        raise NotYet(f"you predicted {guess_ttd:.3f} and {guess_prop:.3f} m, the run ended "
+                     f"{turn_then_drive:.3f} and {proportional:.3f} m off: " + "; ".join(notes))
+    return (f"you predicted {guess_ttd:.3f} m and {guess_prop:.3f} m; the run ended "
+            f"{turn_then_drive:.3f} m and {proportional:.3f} m off")

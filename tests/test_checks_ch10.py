@@ -174,3 +174,29 @@ def test_checks_survive_student_exceptions(check, capsys):
         raise ZeroDivisionError("division by zero")
 
     assert_not_yet(check(broken), capsys, "ZeroDivisionError")
+
+
+# --- predict, then run: which set-up's NEES is inside the band ---------------------------------
+
+RUN_VERDICTS = {"bias held, gyro R = white noise": "above",
+                "bias held, its error spread into R": "inside",
+                "bias as a state (this chapter)": "inside"}
+
+
+def test_nees_prediction_passes_the_runs_verdicts(capsys):
+    assert_pass(ch10.nees_prediction_check(lambda: ["above", "inside", "inside"], RUN_VERDICTS),
+                capsys)
+
+
+@pytest.mark.parametrize(("predicted", "fragment"), [
+    (lambda: ("inside", "inside", "inside"), "overconfident"),   # a held bias taken as honest
+    (lambda: ("below", "inside", "inside"), "overconfident"),    # over- and under- confused
+    (lambda: ("above", "above", "inside"), "about the right size"),
+    (lambda: ("above", "inside", "above"), "carries its uncertainty"),
+    (lambda: ("above", "inside"), "one per set-up"),
+    (lambda: ("high", "ok", "ok"), "one per set-up"),
+    (not_written, "NotImplementedError"),
+    (ch10.reference_nees_sample, "abcwc's own"),
+])
+def test_nees_prediction_refuses(predicted, fragment, capsys):
+    assert_not_yet(ch10.nees_prediction_check(predicted, RUN_VERDICTS), capsys, fragment)

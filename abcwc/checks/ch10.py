@@ -11,6 +11,9 @@ Exercises, on the state ``s = [x, y, theta, v, omega, b]`` (m, m, rad, m/s, rad/
   heading error wrapped to (-pi, pi].
 
 The ``reference_*`` answers the notebook falls back on are the library's own.
+* ``predicted_nees_verdicts()``: three words written down *before* section 8's runs:
+  whether each EKF set-up's average NEES falls below, inside or above the band, judged
+  against the runs.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from abcwc.estimation.ekf import motion as reference_motion
 from abcwc.estimation.ekf import motion_jacobian as reference_motion_jacobian
 
 __all__ = [
+    "nees_prediction_check",
     "kalman_update_check",
     "motion_check",
     "nees_check",
@@ -192,3 +196,37 @@ def nees_check(nees_fn: Callable[[np.ndarray, np.ndarray, np.ndarray], float]) -
         expect(np.ndim(got) == 0, f"{what}: expected one number, got {format_value(got)}")
         expect_close(got, want, what=what, rtol=1e-9, atol=1e-12, ref="e^T P^-1 e")
     return f"{len(cases)} samples match, the +-pi seam included"
+
+
+# --- predict, then run: which set-up is honest --------------------------------------------------
+
+VERDICTS = ("below", "inside", "above")
+_WHY = {
+    "bias held, gyro R = white noise": "a held bias with no uncertainty leaves its error out of "
+    "the filter's sums: it believes its heading far better than it is (overconfident)",
+    "bias held, its error spread into R": "the bias error, spread into the gyro's noise for "
+    "the minute it was worked out for, is about the right size over that minute",
+    "bias as a state (this chapter)": "with the bias a state the filter measures it and "
+    "carries its uncertainty: the noise model of section 4, honest",
+}
+
+
+@checker("prediction")
+def nees_prediction_check(predicted: Callable[[], tuple[str, str, str]],
+                          verdicts: dict[str, str]) -> str:
+    """Three of ``VERDICTS``, one per set-up in the order ``verdicts`` lists them (the
+    runs' own), written before the runs."""
+    value = predicted()
+    try:
+        guesses = tuple(value)
+    except TypeError:
+        guesses = ()
+    expect(len(guesses) == len(verdicts) and all(g in VERDICTS for g in guesses),
+           f"predicted_nees_verdicts() gave {format_value(value)}; return {len(verdicts)} of "
+           f"{VERDICTS}, one per set-up, in the order of the table")
+    wrong = [f"{name}: {measured}, not {guess} ({_WHY.get(name, '')})"
+             for (name, measured), guess in zip(verdicts.items(), guesses) if guess != measured]
+    if wrong:
+        raise NotYet("not yet: " + "; ".join(wrong))
+    return "all three as the runs found: " + ", ".join(
+        f"{name} {measured}" for name, measured in verdicts.items())

@@ -245,3 +245,60 @@ def test_corners_check_passes_an_independent_measurement(capsys):
 ])
 def test_corners_check_refuses(measured, fragment, capsys):
     assert_not_yet(ch01.corners_check, measured, capsys, fragment)
+
+
+# --- chapter 00, exercise 4: measuring the counts per wheel turn --------------------------------
+
+
+@pytest.fixture(scope="module")
+def straight_log():
+    import abcwc
+
+    chair = abcwc.connect(world="lab", seed=4)
+    return chair.drive(PotCommand(170, 128), seconds=5.0)
+
+
+def test_counts_measurement_passes_an_independent_measurement(straight_log, capsys):
+    """Counts per metre of true path, times one wheel turn's 0.6126 m."""
+    def counts_per_turn(log):
+        counts = (log.ticks[-1, 0] + log.ticks[-1, 1]) / 2
+        return counts / log.distance_travelled() * math.pi * 0.195
+    check = functools.partial(ch00.counts_measurement_check, log=straight_log)
+    line = assert_pass(check, counts_per_turn, capsys)
+    assert "1242" in line or "1243" in line       # the worn chair's encoder wheels, 1.2 % big
+
+
+@pytest.mark.parametrize(("measured", "fragment"), [
+    (lambda log: 400 * 0.195 / 0.062, "nominal"),
+    (lambda log: float(np.mean(log.ticks[-1])) / log.distance_travelled(), "counts per metre"),
+    (lambda log: log.distance_travelled() / (math.pi * 0.195) / float(np.mean(log.ticks[-1])),
+     "upside down"),
+    (lambda log: 1300.0, "wheel turns gives"),
+    (lambda log: float("nan"), "one number"),
+    (not_written, "NotImplementedError"),
+    (ch00.reference_counts_per_wheel_turn, "abcwc's own"),
+])
+def test_counts_measurement_refuses(straight_log, measured, fragment, capsys):
+    check = functools.partial(ch00.counts_measurement_check, log=straight_log)
+    assert_not_yet(check, measured, capsys, fragment)
+
+
+# --- chapter 00, exercise 5: predicting where the chair comes to rest ---------------------------
+
+REST = functools.partial(ch00.rest_prediction_check, measured=0.96)
+
+
+def test_rest_prediction_passes_a_reasoned_guess(capsys):
+    assert_pass(REST, lambda: 1.2 - 0.066 - 0.2, capsys)
+
+
+@pytest.mark.parametrize(("predicted", "fragment"), [
+    (lambda: 1.2, "cannot stop on the 1.2 m line"),
+    (lambda: 1.5, "cannot stop"),
+    (lambda: 0.45, "past the line"),
+    (lambda: -1.0, "one distance"),
+    (not_written, "NotImplementedError"),
+    (ch00.reference_distance_ahead, "abcwc's own"),
+])
+def test_rest_prediction_refuses(predicted, fragment, capsys):
+    assert_not_yet(REST, predicted, capsys, fragment)

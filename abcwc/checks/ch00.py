@@ -11,6 +11,11 @@ Exercises (thesis 4.2.1 and 2.2.5):
 
 Each ``reference_*`` function is the answer the notebook falls back on when the
 exercise is not done yet.
+* ``measured_counts_per_turn(log)``: the counts per drive-wheel turn a chair really gives,
+  measured from a straight drive's counts (both wheels' mean) and its true path;
+* ``predicted_rest_distance()``: a distance written down *before* the chair creeps at the
+  wall: where base_link comes to rest (m from the wall) when the controller stops at a
+  sonar distance of 1.2 m.
 """
 
 from __future__ import annotations
@@ -20,11 +25,13 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import checker, expect, expect_close, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
 from abcwc.params import ChairParams, default_params
 from abcwc.types import Pose2D, SensorFrame, make_frame
 
 __all__ = [
+    "counts_measurement_check",
+    "rest_prediction_check",
     "counts_per_wheel_turn",
     "distance_ahead",
     "encoder_counts_to_distance",
@@ -144,3 +151,63 @@ def distance_ahead(fn: Callable[[SensorFrame, ChairParams], float]) -> str:
 def _is_number(value: object) -> bool:
     return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
         value, bool)
+
+
+# --- measure: the counts per wheel turn of this chair ---------------------------------------------
+
+
+@checker("measurement")
+def counts_measurement_check(measured: Callable[[object], float], log: object) -> str:
+    """``measured(log)``: counts per drive-wheel turn from a straight drive's final counts
+    (mean of both wheels) and its true path, against the same measurement made here."""
+    p = default_params()
+    value = measured(log)
+    expect(isinstance(value, (int, float, np.floating)) and math.isfinite(float(value))
+           and value > 0, f"measured_counts_per_turn gave {format_value(value)}; return one "
+           "number of counts per wheel turn")
+    value = float(value)
+    turns = log.distance_travelled() / (math.pi * p.drive_wheel_diameter)
+    expected = float(np.mean(log.ticks[-1]) - np.mean(log.ticks[0])) / turns
+    nominal = p.counts_per_encoder_turn * p.drive_wheel_diameter / p.encoder_wheel_diameter
+    if abs(value - expected) <= 0.002 * expected:
+        return (f"this chair gives {value:.1f} counts per wheel turn, "
+                f"{100 * (value / nominal - 1):+.1f} % from the nominal {nominal:.1f} (the "
+                "thesis's firmware uses 1242.7)")
+    slips = {
+        f"that is the nominal {nominal:.1f} from the wheels' sizes; measure it from the log: "
+        "the counts over the wheel turns the true path took": nominal,
+        "that is counts per metre: one wheel turn rolls pi d_w":
+            expected / (math.pi * p.drive_wheel_diameter),
+        "that is metres per count, upside down": 1 / expected,
+    }
+    for slip, wrong in slips.items():
+        if abs(value - wrong) <= 0.002 * abs(wrong):
+            raise NotYet(f"{value:.6g}: {slip}")
+    raise NotYet(f"you measured {value:.1f}; the drive's mean count over its "
+                 f"{turns:.2f} wheel turns gives {expected:.1f}")
+
+
+# --- predict, then run: where the chair comes to rest ---------------------------------------------
+
+
+@checker("prediction")
+def rest_prediction_check(predicted: Callable[[], float], measured: float,
+                          threshold: float = 1.2) -> str:
+    """base_link's distance to the wall at rest (m), written before the run, against the
+    run's; the controller stops at a sonar distance of ``threshold`` m."""
+    value = predicted()
+    expect(isinstance(value, (int, float)) and math.isfinite(value) and value >= 0,
+           f"predicted_rest_distance() gave {format_value(value)}; write one distance in m")
+    if value >= threshold - 0.03:
+        raise NotYet(f"you predicted {value:.2f} m, the chair came to rest {measured:.2f} m "
+                     f"from the wall: it cannot stop on the {threshold} m line. The sonar's "
+                     "reading is up to 0.1 s old when the controller sees it, and the wheels "
+                     "roll on after the stop command while the motors slow down")
+    if abs(value - measured) <= 0.15:
+        return (f"you predicted {value:.2f} m, it came to rest {measured:.2f} m from the wall: "
+                f"{threshold - measured:.2f} m past the line, the reading's age and the "
+                "roll-out")
+    raise NotYet(f"you predicted {value:.2f} m, the chair came to rest {measured:.2f} m from "
+                 f"the wall, {threshold - measured:.2f} m past the line: at 0.66 m/s a 0.1 s "
+                 "old reading is 7 cm, and the roll-out after the stop a few tenths of a "
+                 "second of driving")

@@ -223,3 +223,31 @@ def test_diagnosis_check_refuses_the_stub_and_abcwcs_own(capsys):
     assert_not_yet(ch08.diagnosis_check(not_written), capsys, "NotImplementedError")
     assert_not_yet(ch08.diagnosis_check(ch08.reference_correction_factors), capsys,
                    "abcwc's own")
+
+
+# --- exercise 5: figure 51's covariance ------------------------------------------------------
+
+
+def test_covariance_check_passes_an_independent_covariance(capsys):
+    def by_hand(ends):
+        n = len(ends)
+        out = np.zeros((3, 3))
+        for i in range(3):
+            for j in range(3):
+                a, b = ends[:, i] - ends[:, i].mean(), ends[:, j] - ends[:, j].mean()
+                out[i, j] = (a * b).sum() / (n - 1)
+        return out
+    assert_pass(ch08.covariance_check(by_hand), capsys)
+
+
+@pytest.mark.parametrize(("fn", "fragment"), [
+    (lambda ends: np.cov(ends.T, ddof=0), "n = 10"),
+    (lambda ends: np.diag(np.var(ends, axis=0, ddof=1)), "only the variances"),
+    (lambda ends: np.cov(ends)[:3, :3], "ends.T"),
+    (lambda ends: np.cov(ends.T)[:2, :2], "3 x 3"),
+    (lambda ends: np.cov(ends.T) * 2, "expected"),
+    (not_written, "NotImplementedError"),
+    (ch08.reference_correction_factors, "abcwc's own"),
+])
+def test_covariance_check_refuses(fn, fragment, capsys):
+    assert_not_yet(ch08.covariance_check(fn), capsys, fragment)

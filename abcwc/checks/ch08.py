@@ -21,6 +21,8 @@ Borenstein, Everett and Feng's report *Where am I?* (1996). Exercises:
 
 Each ``reference_*`` function is the answer the notebook falls back on; it calls the
 library (:mod:`abcwc.estimation.umbmark`).
+* ``trials_covariance(ends)``: the covariance (3 x 3) of the thesis's ten end positions,
+  measured from figure 51's data and compared with the matrix the thesis printed.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from abcwc.params import default_params
 
 __all__ = [
     "WHEEL_ANSWERS",
+    "covariance_check",
     "WHEEL_BASE_ANSWERS",
     "alpha_beta_radius_check",
     "diagnosis_check",
@@ -284,3 +287,37 @@ def diagnosis_check(diagnosis: Callable[[], dict]) -> str:
         raise NotYet("not yet on " + "; and ".join(wrong))
     return ("right: the second chair's right encoder wheel is 0.8 % smaller than its left, "
             "and its effective wheel base 2 % narrower than the nominal 440 mm")
+
+
+# --- measure: figure 51's covariance from its own trials ---------------------------------------
+
+PRINTED_FIGURE_51 = np.diag([0.0212, 0.0041, 0.0042])
+
+
+@checker("measurement")
+def covariance_check(fn: Callable[[np.ndarray], np.ndarray]) -> str:
+    """``fn(ends)``: the (3, 3) covariance of the ten trials' (x, y, theta), as figure 51
+    computed it (MATLAB's ``cov``: divided by n - 1), against the printed matrix."""
+    ends = np.vstack([(t := umbmark.load_thesis_trials())["cw"], t["ccw"]])
+    got = fn(ends.copy())
+    try:
+        got = np.asarray(got, dtype=float)
+    except (TypeError, ValueError):
+        raise NotYet(f"trials_covariance gave {format_value(got)}; return a 3 x 3 array") from None
+    expect(got.shape == (3, 3), f"trials_covariance gave shape {got.shape}; the covariance of "
+           "(x, y, theta) is 3 x 3 (np.cov wants the variables as rows: ends.T)")
+    expected = np.cov(ends.T, ddof=1)
+    if np.allclose(got, expected, atol=1e-9):
+        return (f"var x {got[0, 0]:.4f} and var y {got[1, 1]:.4f} as printed; var theta "
+                f"{got[2, 2]:.4f}, not the printed {PRINTED_FIGURE_51[2, 2]}, and x and y "
+                f"covary ({got[0, 1]:.4f}), which the printed matrix leaves out")
+    if np.allclose(got, np.cov(ends.T, ddof=0), atol=1e-9):
+        raise NotYet("that divides by n = 10; figure 51's 0.0212 and 0.0041 come from n - 1 "
+                     "(MATLAB's cov, the unbiased estimate)")
+    if np.allclose(got, np.diag(np.diag(expected)), atol=1e-9):
+        raise NotYet("only the variances: the trials' x and y errors vary together, and the "
+                     "covariance keeps that off the diagonal")
+    if np.allclose(got, np.cov(ends, ddof=1)[:3, :3], atol=1e-9):
+        raise NotYet("np.cov takes each row as a variable: pass ends.T")
+    raise NotYet(f"var x came out {got[0, 0]:.4f}, expected {expected[0, 0]:.4f}; the "
+                 "covariance of the ten (x, y, theta) rows, divided by n - 1")

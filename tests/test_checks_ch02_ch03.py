@@ -287,3 +287,37 @@ def test_sonar_prediction_passes_the_geometry_and_the_datasheet(capsys):
 ])
 def test_sonar_prediction_refuses(predicted, fragment, capsys):
     assert_not_yet(wall_check(predicted), capsys, fragment)
+
+
+# --- chapter 02, exercise 3: measuring the 63 % time -----------------------------------------
+
+
+def model_step(dead=0.06, tau=0.25, dt=0.02):
+    t = np.arange(-0.5, 2.0, dt)
+    v = np.where(t > dead, 1.0 - np.exp(-(t - dead) / tau), 0.0)
+    return t, v
+
+
+def test_t63_check_passes_an_independent_reading(capsys):
+    t, v = model_step()
+
+    def crossing(t, v):
+        final = v[-25:].mean()
+        fine = np.linspace(0.0, t[-1], 20001)
+        return float(fine[np.argmax(np.interp(fine, t, v) >= 0.632 * final)])
+    assert_pass(ch02.t63_check(crossing, t, v), capsys)
+
+
+@pytest.mark.parametrize(("measured", "fragment"), [
+    (lambda t, v: 0.25, "tau alone"),
+    (lambda t, v: 0.06, "dead time"),
+    (lambda t, v: 1.31, "settling time"),
+    (lambda t, v: 0.81, "log's own clock"),
+    (lambda t, v: 0.5, "reaches 63.2 %"),
+    (lambda t, v: float("nan"), "one time"),
+    (not_written, "NotImplementedError"),
+    (ch02.turn_value_check, "abcwc's own"),
+])
+def test_t63_check_refuses(measured, fragment, capsys):
+    t, v = model_step()
+    assert_not_yet(ch02.t63_check(measured, t, v), capsys, fragment)

@@ -6,6 +6,9 @@
 * :func:`twist_to_pots_check` — the calibrated velocity controller, ``(v, w) ->
   PotCommand``, the inverse of the motor controller's model, compared with
   :func:`abcwc.control.twist_to_pot_command` over a sweep of speeds and turn rates.
+* :func:`t63_check` — the time (s) after a step command at which the chair has 63.2 % of
+  its final speed, measured from the step response, against the response itself and
+  the model's ``L + tau``.
 * :func:`coast_prediction_check` — a distance written down *before* the run that
   measures it: how far the chair still rolls after a stop sent at 1.0 m/s, from the
   step response's dead time and lag, judged against the run.
@@ -31,7 +34,8 @@ from abcwc.control.velocity import twist_to_pot_command
 from abcwc.params import default_params
 from abcwc.types import Twist
 
-__all__ = ["TURN_VALUES", "coast_prediction_check", "turn_value_check", "twist_to_pots_check"]
+__all__ = ["TURN_VALUES", "coast_prediction_check", "t63_check", "turn_value_check",
+           "twist_to_pots_check"]
 
 # (angle in degrees, + = left; pot-scale value; where it comes from)
 TURN_VALUES = (
@@ -141,3 +145,36 @@ def coast_prediction_check(predicted: Callable[[], float], measured: float,
     raise NotYet(f"you predicted {value:.2f} m, the chair rolled {measured:.3f} m: at "
                  f"{speed:g} m/s the wheels run on through the dead time and then slow with "
                  "the lag; add up the distance each part covers")
+
+
+@checker("measurement")
+def t63_check(measured: Callable[[np.ndarray, np.ndarray], float], t: np.ndarray,
+              v: np.ndarray, dead_time: float = 0.06, tau: float = 0.25) -> str:
+    """``measured(t, v)``: the time after the command (s) at which the step response
+    ``v`` (m/s at times ``t``, s from the command) first reaches 63.2 % of its final
+    value, against the response (interpolated) and the model's ``L + tau``."""
+    value = measured(np.array(t), np.array(v))
+    expect(isinstance(value, (int, float, np.floating)) and math.isfinite(float(value)),
+           f"time_to_63(t, v) gave {format_value(value)}; return one time in s")
+    value = float(value)
+    final = float(np.mean(v[-25:]))
+    after = t > 0
+    expected = float(np.interp(0.632 * final, v[after], t[after]))
+    if abs(value - expected) <= 0.02:
+        return (f"{value:.3f} s after the command; the model says L + tau = "
+                f"{dead_time + tau:.2f} s: the lag's tau is measured from when the wheels "
+                "hear the command, not from when it is sent")
+    slips = {
+        "that is tau alone: the clock starts when the command is sent, and the wheels "
+        "hear it only after the dead time": tau,
+        "that is the dead time, when the speed starts to rise": dead_time,
+        "that is the settling time, 99 %, not 63.2 %": dead_time + 5 * tau,
+        "that is when the step was sent on the log's own clock (t0 = 0.5 s): measure from "
+        "the command": expected + 0.5,
+    }
+    for slip, wrong in slips.items():
+        if abs(value - wrong) <= 0.02:
+            raise NotYet(f"{value:.3f} s: {slip} (the response reaches 63.2 % at "
+                         f"{expected:.3f} s)")
+    raise NotYet(f"{value:.3f} s; the response reaches 63.2 % of its final "
+                 f"{final:.3f} m/s at {expected:.3f} s after the command")

@@ -200,3 +200,36 @@ def test_nees_prediction_passes_the_runs_verdicts(capsys):
 ])
 def test_nees_prediction_refuses(predicted, fragment, capsys):
     assert_not_yet(ch10.nees_prediction_check(predicted, RUN_VERDICTS), capsys, fragment)
+
+
+# --- exercise 3: how often the errors lie inside the filter's band -------------------------------
+
+
+def band_data():
+    rng = np.random.default_rng(8)
+    sigmas = np.abs(rng.normal(0.05, 0.01, (400, 3))) + 0.01
+    errors = rng.normal(0.0, 1.0, (400, 3)) * sigmas * 0.9
+    return errors, sigmas
+
+
+def test_band_share_check_passes_an_independent_count(capsys):
+    errors, sigmas = band_data()
+
+    def count(e, s):
+        return [sum(abs(e[k, j]) <= 2 * s[k, j] for k in range(len(e))) / len(e)
+                for j in range(3)]
+    assert_pass(ch10.band_share_check(count, errors, sigmas), capsys)
+
+
+@pytest.mark.parametrize(("fn", "fragment"), [
+    (lambda e, s: 100 * (np.abs(e) <= 2 * s).mean(axis=0), "percentages"),
+    (lambda e, s: (np.abs(e) <= s).mean(axis=0), "1-sigma"),
+    (lambda e, s: (np.abs(e) <= 2 * s**2).mean(axis=0), "variances"),
+    (lambda e, s: (np.abs(e) <= 2 * s).mean(), "three"),
+    (lambda e, s: (e <= 2 * s).mean(axis=0), "expected"),
+    (not_written, "NotImplementedError"),
+    (ch10.reference_nees_sample, "abcwc's own"),
+])
+def test_band_share_check_refuses(fn, fragment, capsys):
+    errors, sigmas = band_data()
+    assert_not_yet(ch10.band_share_check(fn, errors, sigmas), capsys, fragment)

@@ -14,6 +14,9 @@ The ``reference_*`` answers the notebook falls back on are the library's own.
 * ``predicted_nees_verdicts()``: three words written down *before* section 8's runs:
   whether each EKF set-up's average NEES falls below, inside or above the band, judged
   against the runs.
+* ``shares_inside(errors, sigmas)``: the share of the time each of x, y and the heading
+  lies inside the filter's own 2-sigma band, measured on the five-minute drive and
+  compared with the 95 % a 2-sigma band promises.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from abcwc.estimation.ekf import motion as reference_motion
 from abcwc.estimation.ekf import motion_jacobian as reference_motion_jacobian
 
 __all__ = [
+    "band_share_check",
     "nees_prediction_check",
     "kalman_update_check",
     "motion_check",
@@ -230,3 +234,38 @@ def nees_prediction_check(predicted: Callable[[], tuple[str, str, str]],
         raise NotYet("not yet: " + "; ".join(wrong))
     return "all three as the runs found: " + ", ".join(
         f"{name} {measured}" for name, measured in verdicts.items())
+
+
+# --- measure: how often the errors lie inside the filter's own band ----------------------------
+
+
+@checker("measurement")
+def band_share_check(fn: Callable[[np.ndarray, np.ndarray], np.ndarray], errors: np.ndarray,
+                     sigmas: np.ndarray) -> str:
+    """``fn(errors, sigmas)``: for (N, 3) errors of x, y, heading and the filter's (N, 3)
+    standard deviations, the share of the rows in which each error lies within two of its
+    standard deviations (3 fractions), against the same count made here."""
+    errors, sigmas = np.asarray(errors, float), np.asarray(sigmas, float)
+    got = fn(errors.copy(), sigmas.copy())
+    try:
+        got = np.asarray(got, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise NotYet(f"shares_inside gave {format_value(got)}; return three fractions: x, y, "
+                     "heading") from None
+    expect(got.size == 3, f"shares_inside gave {got.size} numbers; return three, one each "
+           "for x, y and the heading")
+    expected = (np.abs(errors) <= 2 * sigmas).mean(axis=0)
+    if np.allclose(got, expected, atol=0.005):
+        verdict = ("more often than the 95 % a 2-sigma band promises: a little cautious"
+                   if expected.min() > 0.97 else "about the 95 % a 2-sigma band promises")
+        return (f"x {100 * got[0]:.0f} %, y {100 * got[1]:.0f} %, heading {100 * got[2]:.0f} % "
+                f"of the time inside +-2 sigma: {verdict}")
+    if np.allclose(got, 100 * expected, atol=0.5):
+        raise NotYet("those are percentages; return fractions between 0 and 1")
+    if np.allclose(got, (np.abs(errors) <= sigmas).mean(axis=0), atol=0.005):
+        raise NotYet("that is the 1-sigma band; the exercise asks for +-2 sigma")
+    if np.allclose(got, (np.abs(errors) <= 2 * sigmas**2).mean(axis=0), atol=0.005):
+        raise NotYet("sigmas are standard deviations already (metres and radians); "
+                     "squaring them compares errors with variances")
+    raise NotYet(f"got {np.round(got, 3).tolist()}, expected {np.round(expected, 3).tolist()}: "
+                 "the share of rows with |error| <= 2 sigma, per column")

@@ -230,3 +230,37 @@ def test_tight_prediction_passes_a_stopping_distance_reading(capsys):
 ])
 def test_tight_prediction_refuses(predicted, fragment, capsys):
     assert_not_yet(tight_check(predicted), capsys, fragment)
+
+
+# --- measure: the heading error gained per corner --------------------------------------------
+
+GAPS = [(0.08, math.radians(d)) for d in (-0.2, 1.5, 2.8, 4.5, 5.8, 7.2, 8.7, 95.7, -175.3,
+                                           -84.4, 4.3)]
+
+
+def corner_check(fn):
+    return ch07.corner_gain_check(fn, GAPS, clean=7)
+
+
+def test_corner_gain_passes_an_independent_fit(capsys):
+    def least_squares(gaps):
+        y = [math.degrees(turn) for _, turn in gaps[:7]]
+        x = list(range(7))
+        mx, my = sum(x) / 7, sum(y) / 7
+        return (sum((a - mx) * (b - my) for a, b in zip(x, y))
+                / sum((a - mx) ** 2 for a in x))
+    assert_pass(corner_check(least_squares), capsys)
+
+
+@pytest.mark.parametrize(("fn", "fragment"), [
+    (lambda gaps: math.radians(1.47), "radians"),
+    (lambda gaps: math.degrees(gaps[6][1] - gaps[0][1]), "divide by the number"),
+    (lambda gaps: float(np.polyfit(range(len(gaps)), np.degrees([t for _, t in gaps]), 1)[0]),
+     "hit the shelf"),
+    (lambda gaps: 3.0, "straight line"),
+    (lambda gaps: "1.5", "one number"),
+    (not_written, "NotImplementedError"),
+    (ch07.reference_proportional_command, "abcwc's own"),
+])
+def test_corner_gain_refuses(fn, fragment, capsys):
+    assert_not_yet(corner_check(fn), capsys, fragment)

@@ -15,6 +15,9 @@ The ``reference_*`` answers the notebook falls back on are the library's own
 (:mod:`abcwc.behaviours.landmark`).
 * ``predicted_tight_errors()``: two distances written down *before* both controllers are
   asked for 2 cm: each one's mean final error (m), judged against the run.
+* ``degrees_per_corner(corner_gaps)``: the heading error the worn chair's odometry gains
+  per corner, measured from the corners reached before the chair touched anything, and
+  compared with its geometry (every turn counted about 1.7 % too large).
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ from abcwc.checks.report import (
 from abcwc.types import Pose2D
 
 __all__ = [
+    "corner_gain_check",
     "tight_prediction_check",
     "THESIS_MACHINE",
     "distance_and_bearing_check",
@@ -244,3 +248,42 @@ def tight_prediction_check(predicted: Callable[[], tuple[float, float]],
                      f"{turn_then_drive:.3f} and {proportional:.3f} m off: " + "; ".join(notes))
     return (f"you predicted {guess_ttd:.3f} m and {guess_prop:.3f} m; the run ended "
             f"{turn_then_drive:.3f} m and {proportional:.3f} m off")
+
+
+# --- measure: the heading error gained per corner ----------------------------------------------
+
+
+@checker("measurement")
+def corner_gain_check(fn: Callable[[list], float], corner_gaps: list, clean: int) -> str:
+    """``fn(corner_gaps)``: degrees of heading error gained per corner, from the first
+    ``clean`` corners of ``corner_gaps`` ((position m, heading rad) at each corner reached,
+    in order) before the chair touched anything; against a straight-line fit here and the
+    worn chair's geometry."""
+    value = fn(list(corner_gaps))
+    expect(isinstance(value, (int, float, np.floating)) and math.isfinite(float(value)),
+           f"degrees_per_corner gave {format_value(value)}; return one number of degrees")
+    value = float(value)
+    headings = np.degrees([turn for _, turn in corner_gaps[:clean]])
+    slope = float(np.polyfit(np.arange(clean), headings, 1)[0])
+    from abcwc.sim import ChairErrors
+
+    worn = ChairErrors.worn()
+    geometry = 90.0 * (worn.wheel_base / ((worn.encoder_wheel_left + worn.encoder_wheel_right)
+                                         / 2) - 1)
+    if abs(value - slope) <= 0.25:
+        return (f"{value:.2f} deg a corner; the worn chair's geometry says {geometry:.2f} "
+                "(a 3 % wider wheel base against encoder wheels 1.2 % large: each 90 deg "
+                "turn counted 1.7 % too large)")
+    if abs(value - math.radians(slope)) <= 0.005:
+        raise NotYet("that is in radians; the check wants degrees")
+    if abs(value - (headings[-1] - headings[0])) <= 0.5:
+        raise NotYet(f"{value:.1f} deg is the gain over all {clean} corners; divide by the "
+                     "number of corners between the first and the last")
+    all_slope = float(np.polyfit(np.arange(len(corner_gaps)),
+                                 np.degrees([turn for _, turn in corner_gaps]), 1)[0])
+    if abs(value - all_slope) <= 0.5:
+        raise NotYet("that takes in the corners after the chair hit the shelf, where the "
+                     "odometry kept counting while the chair stood pinned: use the first "
+                     f"{clean} only")
+    raise NotYet(f"{value:.2f} deg a corner; the first {clean} corners gain {slope:.2f} deg a "
+                 "corner (a straight line through their heading errors)")

@@ -274,3 +274,15 @@ def test_teleop_panel_drives_the_simulated_chair():
     assert len(panel.trail) == 1 + 2 * 25
     with pytest.raises(ValueError, match="speed"):
         TeleopPanel(chair, speed=0.0)
+
+
+def test_distance_and_bearing_figure_states_eqns_11_and_12():
+    """The left panel's chair at (1, 1) facing 15 deg, goal (6.5, 5): rho = hypot(5.5, 4) =
+    6.80 m, alpha = atan2(4, 5.5) - 15 deg = +21.0 deg; the right panel wraps alpha."""
+    from abcwc import viz
+
+    fig = viz.plot_distance_and_bearing()
+    left, right = fig.axes
+    assert "rho = 6.80 m" in left.get_title() and "alpha = +21.0°" in left.get_title()
+    assert "wrap alpha" in right.get_title()
+    plt.close(fig)

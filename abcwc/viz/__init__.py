@@ -20,6 +20,7 @@ from abcwc.viz.costmap import (
     plot_footprint,
     plot_occupancy,
 )
+from abcwc.viz.landmark import plot_distance_and_bearing
 from abcwc.viz.scene import (
     ChairArtist,
     chair_outlines,
@@ -48,6 +49,7 @@ __all__ = [
     "chair_outlines",
     "collision_rows",
     "encoder_velocity",
+    "plot_distance_and_bearing",
     "frame_rows",
     "mount_pose",
     "plot_chair",

@@ -47,7 +47,6 @@ class VoiceControl(BehaviourBase):
         self._since = -math.inf
         self._delegate: Behaviour | None = None
         self._pending: SpokenCommand | None = None
-        self._t = 0.0
 
     def reset(self) -> None:
         super().reset()
@@ -73,7 +72,6 @@ class VoiceControl(BehaviourBase):
         return command
 
     def update(self, frame: SensorFrame) -> Twist:
-        self._t = frame.t
         if self._pending is not None:
             self._start(self._pending, frame.t)
             self._pending = None

@@ -243,7 +243,8 @@ def corners_check(measured: Callable[[], tuple[float, float]]) -> str:
         if abs(ideal - model / 2) < 1.0:
             raise NotYet(f"the ideal chair turned {ideal:.1f} deg by your measurement, half "
                          f"the model's {model:.1f}: the corner's command lasts 2 s")
-        unfinished = model * (2.0 - p.command_delay - 0.02 - p.motor_time_constant) / 2.0
+        unfinished = model * (2.0 - p.command_delay - p.control_period
+                              - p.motor_time_constant) / 2.0
         if abs(ideal - unfinished) < 2.0:
             raise NotYet(f"the ideal chair turned {ideal:.1f} deg by your measurement, the "
                          f"model says {model:.1f}: read the heading once the chair has come "

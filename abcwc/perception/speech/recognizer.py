@@ -198,10 +198,7 @@ class CommandRecognizer:
     def _decode_words(self, pcm: bytes) -> tuple[str, list[tuple[str, float, int, int]]]:
         """The grammar's phrase and its words: (word, log acoustic score, first and last
         frame)."""
-        d = self._grammar
-        d.start_utt()
-        d.process_raw(pcm, full_utt=True)
-        d.end_utt()
+        d = _decoded(self._grammar, pcm)
         hyp = d.hyp()
         words = [(_base_word(s.word), _log(s.ascore), s.start_frame, s.end_frame)
                  for s in (d.seg() or []) if not _is_filler(s.word)]
@@ -209,12 +206,18 @@ class CommandRecognizer:
 
     def _decode_phones(self, pcm: bytes) -> np.ndarray:
         """The free phone sequence as rows (log acoustic score, first, last frame)."""
-        d = self._phones
-        d.start_utt()
-        d.process_raw(pcm, full_utt=True)
-        d.end_utt()
+        d = _decoded(self._phones, pcm)
         rows = [(_log(s.ascore), s.start_frame, s.end_frame) for s in (d.seg() or [])]
         return np.array(rows, dtype=float).reshape(-1, 3)
+
+
+def _decoded(decoder: object, pcm: bytes) -> object:
+    """``decoder`` after decoding ``pcm`` as one whole utterance (its hypothesis and
+    segments ready to read)."""
+    decoder.start_utt()
+    decoder.process_raw(pcm, full_utt=True)
+    decoder.end_utt()
+    return decoder
 
 
 def _log(probability: float) -> float:

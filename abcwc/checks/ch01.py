@@ -26,7 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_equal, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_equal, format_value, numbers
 from abcwc.control import direction_pot_command, joystick_to_pot_byte
 from abcwc.control.pots import pot_byte_to_deflection
 from abcwc.control.safety import ComfortLimits
@@ -225,11 +225,8 @@ def corners_check(measured: Callable[[], tuple[float, float]]) -> str:
     """``measured()`` = (worn, ideal) degrees turned by one 2 s corner, against the motor
     model (ideal: ``omega x 2 s``) and the worn chair's budget."""
     value = measured()
-    try:
-        worn, ideal = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise NotYet(f"measured_corners() gave {format_value(value)}; return two angles in "
-                     "degrees: (worn chair, ideal chair)") from None
+    worn, ideal = numbers(value, 2, "measured_corners()",
+                          "return two angles in degrees: (worn chair, ideal chair)")
     expect(math.isfinite(worn) and math.isfinite(ideal),
            f"measured ({worn}, {ideal}); both must be finite numbers of degrees")
     budget = clockwise_budget()

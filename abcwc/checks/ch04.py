@@ -27,7 +27,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value, numbers
 from abcwc.perception.speech.recognizer import word_log_likelihood_ratio
 
 __all__ = [
@@ -125,11 +125,8 @@ def prediction_check(predicted: Callable[[], tuple[float, float]], single: float
     """The two percentages written before the run against what it measured
     (``single`` and ``two_word``, %)."""
     value = predicted()
-    try:
-        guess_single, guess_two = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise NotYet(f"predicted_false_activations() gave {format_value(value)}; return two "
-                     "percentages: (single words, two-word commands)") from None
+    guess_single, guess_two = numbers(value, 2, "predicted_false_activations()",
+                                      "return two percentages: (single words, two-word commands)")
     expect(all(math.isfinite(g) and 0 <= g <= 100 for g in (guess_single, guess_two)),
            f"predicted ({guess_single:g}, {guess_two:g}); each is a percentage, 0-100")
     measured = f"the run measured {single:.0f} % and {two_word:.0f} %"

@@ -36,6 +36,7 @@ from abcwc.checks.report import (
     expect_close,
     expect_equal,
     format_value,
+    numbers,
 )
 from abcwc.types import Pose2D
 
@@ -225,11 +226,8 @@ def tight_prediction_check(predicted: Callable[[], tuple[float, float]],
     """(turn-then-drive, proportional) mean final errors (m) at a 2 cm tolerance, written
     before the run, against the run's."""
     value = predicted()
-    try:
-        guess_ttd, guess_prop = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise NotYet(f"predicted_tight_errors() gave {format_value(value)}; return two "
-                     "distances in m: (turn-then-drive, proportional)") from None
+    guess_ttd, guess_prop = numbers(value, 2, "predicted_tight_errors()",
+                                    "return two distances in m: (turn-then-drive, proportional)")
     expect(all(math.isfinite(g) and g >= 0 for g in (guess_ttd, guess_prop)),
            f"predicted ({guess_ttd}, {guess_prop}); both are distances in m, >= 0")
     notes = []

@@ -29,7 +29,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value, numbers
 from abcwc.estimation.gyro import (
     estimate_gyro_bias,
     gyro_odometry_from_log,
@@ -372,11 +372,8 @@ def end_heading_prediction_check(predicted: Callable[[], tuple[float, float]],
     errors (``wheels``, ``raw_gyro``, degrees); ``bias`` (rad/s) and ``driving`` (s, the
     time after the still start) are what the notebook printed, for naming the slips."""
     value = predicted()
-    try:
-        guess_wheels, guess_raw = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise NotYet(f"predicted_end_heading_errors() gave {format_value(value)}; return two "
-                     "angles in degrees: (wheels, raw gyro)") from None
+    guess_wheels, guess_raw = numbers(value, 2, "predicted_end_heading_errors()",
+                                      "return two angles in degrees: (wheels, raw gyro)")
     expect(math.isfinite(guess_wheels) and math.isfinite(guess_raw),
            f"predicted ({guess_wheels}, {guess_raw}); both must be finite degrees")
     from abcwc.sim import ChairErrors

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value, numbers
 from abcwc.description import homogeneous
 from abcwc.geometry import compose, inverse, wrap_angle
 from abcwc.params import default_params
@@ -261,11 +261,8 @@ def correction_check(fn: Callable[[LocalisationLog], tuple[float, float, float]]
     for seed in seeds:
         log = localisation_log(seed)
         value = fn(log)
-        try:
-            when, metres, degrees = (float(v) for v in value)
-        except (TypeError, ValueError):
-            raise NotYet(f"biggest_correction gave {format_value(value)}; return "
-                         "(time s, distance m, turn deg)") from None
+        when, metres, degrees = numbers(value, 3, "biggest_correction",
+                                        "return (time s, distance m, turn deg)")
         true_metres, true_degrees = log.correction
         found = f"(seed {seed}) you found t = {when:.1f} s, {metres:.3f} m, {degrees:+.2f} deg"
         if abs(when - log.corrected_at) > 0.05:

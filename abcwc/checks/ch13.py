@@ -24,7 +24,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.ndimage import binary_dilation
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value, numbers
 from abcwc.mapping.grid import FREE_THRESH, InverseSensorModel, OccupancyGrid, integrate_log
 
 __all__ = [
@@ -182,11 +182,7 @@ def ekf_map_scores() -> tuple[float, float]:
 def scores_check(measured: Callable[[], tuple[float, float]]) -> str:
     """The two figures read off the run against the same measurement made here."""
     value = measured()
-    try:
-        precision, recall = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise NotYet(f"measured_scores() gave {format_value(value)}; write (precision, "
-                     "recall)") from None
+    precision, recall = numbers(value, 2, "measured_scores()", "write (precision, recall)")
     true_precision, true_recall = ekf_map_scores()
     if abs(precision - true_recall) < 0.02 and abs(recall - true_precision) < 0.02:
         raise NotYet("precision and recall are swapped: precision is the share of the "

@@ -48,6 +48,7 @@ __all__ = [
     "expect_equal",
     "expect_own",
     "format_value",
+    "numbers",
     "use_or_fallback",
 ]
 
@@ -313,3 +314,15 @@ def expect_close(
         f"{where} gave {format_value(g)}{unit_s}, expected {format_value(e)}{unit_s}"
         f"{plus_minus}{_suffix('; '.join(notes))}"
     )
+
+
+def numbers(value: Any, count: int, what: str, wanted: str) -> tuple[float, ...]:
+    """``value`` (an answer of ``count`` numbers, such as a pair of predictions) as floats;
+    "not yet" with ``"<what> gave <value>; <wanted>"`` when it is not ``count`` numbers."""
+    try:
+        got = tuple(float(v) for v in value)
+    except (TypeError, ValueError):
+        got = ()
+    if len(got) != count:
+        raise NotYet(f"{what} gave {format_value(value)}; {wanted}")
+    return got

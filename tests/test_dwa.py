@@ -194,3 +194,90 @@ def test_the_circles_clearance_is_a_bound_wherever_in_its_cell_a_circle_sits():
     assert (check.clearance <= exact + single).all()
     assert (check.clearance >= exact - costmap.resolution * math.sqrt(2) - single).all()
 
+
+
+def test_evading_it_steers_for_the_widest_gap_to_people_walking_on_or_standing():
+    """A walker 1.6 m ahead and 0.6 m to the right, coming at 0.9 m/s, the chair at
+    0.3 m/s with the navigator's limits: no way keeps clear of them walking on, so the
+    chair evades, braking to the slowest speed of the window, and of that speed's turn
+    rates it takes the one whose nearest gap, to the walker walked on, to the walker
+    standing where they are, or to a wall, is widest (each recomputed here with
+    people_gap and the footprint check)."""
+    from dataclasses import replace
+
+    from abcwc.params import load_navigation_params
+
+    local = replace(load_navigation_params().local_planner, min_vel_x=0.0, max_vel_x=0.8,
+                    acc_lim_x=0.8, max_vel_theta=0.8)
+    planner = DwaPlanner(FOOTPRINT, local=local)
+    walker = np.array([[1.6, -0.6, -0.9, 0.0, 0.25]])
+    standing = walker.copy()
+    standing[:, 2:4] = 0.0
+    costmap = corridor()
+    result = planner.plan(costmap, (0.0, 0.0, 0.0), (0.3, 0.0), PATH, people=walker)
+    assert result.evading
+    row = np.flatnonzero(result.valid & (result.samples[:, 0] == result.samples[:, 0].min()))
+    assert result.samples[result.best, 0] == pytest.approx(0.3 - 0.8 / planner.frequency)
+    check = planner.check(costmap, (0.0, 0.0, 0.0), result.samples[row])
+    nearest = np.minimum.reduce([
+        planner.people_gap((0.0, 0.0, 0.0), result.samples[row], walker, 3.0),
+        planner.people_gap((0.0, 0.0, 0.0), result.samples[row], standing, 3.0),
+        check.clearance.min(axis=(0, 2)) - check.needed])
+    assert result.best == row[int(np.argmax(nearest))]
+
+
+def test_evading_a_walker_it_could_stop_short_of_it_brakes_as_hard_as_the_window_allows():
+    """A person walking head-on down the corridor 3 m ahead at 0.9 m/s, the chair at
+    0.8 m/s: no arc keeps clear of where they walk, but the chair can still stop short of
+    where they stand, so it asks for the slowest speed one cycle can reach
+    (v0 - acc_lim_x / controller_frequency) and says it is evading."""
+    planner = DwaPlanner(FOOTPRINT)
+    walker = np.array([[3.0, 0.0, -0.9, 0.0, 0.25]])
+    result = planner.plan(corridor(), (0.0, 0.0, 0.0), (0.8, 0.0), PATH, people=walker)
+    assert result.evading
+    slowest = 0.8 - planner.local.acc_lim_x / planner.frequency
+    assert result.command.v == pytest.approx(max(slowest, planner.local.min_vel_x))
+
+
+def test_a_goal_just_ahead_is_driven_to_not_stood_short_of():
+    """The path ends 0.3 m straight ahead of a chair creeping at 0.1 m/s in open floor,
+    with the navigator's limits (no reversing, 0.8 m/s^2). The forward point (0.325 m
+    ahead of each trajectory's end) would pass the goal and score driving on as no better
+    than stopping; near the goal only the end counts, and the chair drives on to it."""
+    from dataclasses import replace
+
+    from abcwc.params import load_navigation_params
+
+    local = replace(load_navigation_params().local_planner, min_vel_x=0.0, max_vel_x=0.8,
+                    acc_lim_x=0.8)
+    costmap = Costmap.rolling_window((0.0, 0.0, 0.0), 5.0, 0.05, default=FREE_SPACE)
+    path = np.column_stack([np.linspace(-0.5, 0.3, 17), np.zeros(17)])
+    result = DwaPlanner(FOOTPRINT, local=local).plan(costmap, (0.0, 0.0, 0.0), (0.1, 0.0), path)
+    assert result.command.v > 0.1
+    end = result.poses[result.best, -1, :2]
+    assert math.hypot(*(end - path[-1])) < 0.15
+
+
+def test_a_way_counts_only_if_the_chair_can_still_stop_on_it():
+    """A wall across the corridor ahead of a chair at 0.8 m/s (navigator limits, 0.5 s of
+    braking delay): the nearest wall that the second at constant speed clears and the
+    nearest that the stop clears lie apart by what stopping adds, the closed form
+    v (period + delay) + v^2 / (2 a) - v * sim_time = 0.56 + 0.40 - 0.80 = 0.16 m."""
+    from dataclasses import replace
+
+    from abcwc.params import load_navigation_params
+
+    local = replace(load_navigation_params().local_planner, min_vel_x=0.0, max_vel_x=0.8,
+                    acc_lim_x=0.8, max_vel_theta=0.8)
+    planner = DwaPlanner(FOOTPRINT, local=local, braking_delay=0.5)
+    ahead = np.array([[0.8, 0.0]])
+    walls = np.arange(1.3, 2.0, 0.01)
+
+    def nearest_clear(stopping):
+        return next(x for x in walls
+                    if planner.check(corridor(wall_x=x), (0.0, 0.0, 0.0), ahead,
+                                     stopping=stopping).valid[0])
+
+    period = 1.0 / planner.frequency
+    extra = 0.8 * (period + 0.5) + 0.8**2 / (2 * 0.8) - 0.8 * local.sim_time
+    assert nearest_clear(True) - nearest_clear(False) == pytest.approx(extra, abs=0.05)

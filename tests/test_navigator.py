@@ -273,3 +273,41 @@ def test_drives_by_a_map_file_the_mapping_made(tmp_path):
     assert navigator.status is Status.SUCCEEDED, navigator.failure
     assert frame.collisions == 0
     assert math.hypot(chair.pose.x - 8.0, chair.pose.y - 6.5) <= 0.3
+
+
+@pytest.mark.parametrize("gap, cap", [(math.inf, 0.8), (0.3, 0.8), (0.15, 0.4), (0.06, 0.3),
+                                      (-0.02, 0.3)])
+def test_near_obstacles_the_speed_is_scaled_down_along_the_same_arc(gap, cap):
+    """DWA's (0.8 m/s, 0.4 rad/s) with the footprint ``gap`` m from what it may not come
+    nearer: at most max_vel_x * gap / slow_within (0.8 * gap / 0.3), never below
+    narrow_speed (0.3 m/s), and the turn rate scaled with it, so the chair stays on the
+    arc DWA checked (curvature 0.5 /m)."""
+    navigator = Navigator.for_world(SimBase("floor", seed=0, people=False).world)
+    s = navigator.settings
+    assert (s.max_vel_x, s.slow_within, s.narrow_speed) == (0.8, 0.3, 0.3)
+    result = DwaResult(Twist(0.8, 0.4), np.zeros((1, 2)), np.zeros((1, 1, 3)),
+                       np.ones(1, bool), np.zeros(1), 0, gap=gap)
+    command = navigator._regulated(result, Pose2D(3.0, 9.0, 0.0))
+    assert command.v == pytest.approx(cap)
+    assert command.w / command.v == pytest.approx(0.5)
+
+
+def test_near_a_person_the_speed_is_scaled_down_along_the_same_arc(monkeypatch):
+    """A person standing ahead of the chair: the speed is at most people_speed +
+    (max_vel_x - people_speed) * gap / people_slow_within, the gap from the covering
+    circles to the person's body (people_gap of standing still), and the arc is kept;
+    2 m and more away, nothing changes."""
+    navigator = Navigator.for_world(SimBase("floor", seed=0, people=False).world)
+    s = navigator.settings
+    pose = Pose2D(3.0, 9.0, 0.0)
+    result = DwaResult(Twist(0.8, 0.4), np.zeros((1, 2)), np.zeros((1, 1, 3)),
+                       np.ones(1, bool), np.zeros(1), 0)
+    for x in (4.6, 5.2, 8.0):
+        person = np.array([[x, 9.0, 0.0, 0.0, 0.25]])
+        monkeypatch.setattr(navigator.people, "moving_discs", lambda person=person: person)
+        gap = navigator.dwa.people_gap(pose, np.zeros((1, 2)), person, 0.0)[0]
+        expected = min(0.8, s.people_speed + (0.8 - s.people_speed) * gap / s.people_slow_within)
+        command = navigator._regulated(result, pose)
+        assert command.v == pytest.approx(expected)
+        assert command.w / command.v == pytest.approx(0.5)
+    assert command.v == 0.8  # the last person, 8 m ahead, is far enough

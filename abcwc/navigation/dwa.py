@@ -25,7 +25,10 @@ Every control cycle (``controller_frequency``, 5 Hz in the thesis's A.17):
    centre to cell centre, so a circle's clearance is taken as the transform at its
    cell less its centre's distance from that cell's centre, and must exceed its radius
    by half a cell's diagonal (where in its cell the obstacle may lie): a bound, not an
-   estimate, so the outline never reaches an obstacle's cell. The others
+   estimate, so the outline never reaches an obstacle's cell. A trajectory must also
+   leave the chair room to stop: the way it would brake to a stand after taking the
+   sample (the wheels' lag, then ``acc_lim_x``) is checked the same way, Fox's
+   "admissible" velocities (:meth:`DwaPlanner.check`). The others
    cost (base_local_planner's ``meter_scoring``)::
 
        pdist_scale * path_distance + gdist_scale * goal_distance + occdist_scale * max_cost
@@ -36,7 +39,9 @@ Every control cycle (``controller_frequency``, 5 Hz in the thesis's A.17):
    0.325 m) ahead of it along its final heading (dwa_local_planner's "forward point",
    its ``goal_front`` and ``alignment`` costs). Without the forward point every turn on
    the spot ends where it began and scores as standing still, so a chair facing away
-   from its path would never turn to it. ``max_cost`` is the highest costmap value
+   from its path would never turn to it. Within 0.5 m of the path's end both points are
+   the trajectory's end: a forward point that passes a goal less than 0.325 m ahead
+   would score driving on as no better than standing. ``max_cost`` is the highest costmap value
    under the footprint. The two distances are straight lines from the point's cell to
    the nearest path cell and to the goal cell (centre to centre), where
    base_local_planner's ``MapGrid`` runs a wavefront around obstacles: a trajectory
@@ -79,6 +84,8 @@ class DwaResult:
     evading: bool = False  # no trajectory keeps clear of people: the one farthest from them
     # and from walls
     terms: dict[str, np.ndarray] = field(default_factory=dict)
+    gap: float = math.inf  # m: how much nearer the chair's covering circles could come to
+    # an obstacle where they are now before the check refuses them (< 0: already nearer)
 
     @property
     def stuck(self) -> bool:
@@ -151,6 +158,11 @@ class DwaPlanner:
             raise ValueError(f"braking_delay must be a finite number >= 0 s, "
                              f"got {braking_delay!r}")
         self.braking_delay = braking_delay  # s from deciding to stop to full braking
+        # m: closer than this to the path's end, both scored points are the trajectory's
+        # end (Nav2 DWB's PathAlign and GoalAlign critics stop within their
+        # threshold_to_consider, 0.5 m): with the goal less than heading_lookahead ahead,
+        # a forward point that passes it scores driving on as no better than standing
+        self.forward_point_within = 0.5
         lp = self.local
         if not (lp.vx_samples >= 1 and lp.vtheta_samples >= 1):
             raise ValueError("vx_samples and vtheta_samples must be >= 1")
@@ -180,18 +192,23 @@ class DwaPlanner:
 
         ``people`` ((M, 5): x, y, vx, vy, radius; m, m/s) are moving discs, each
         predicted at constant velocity: a trajectory must keep its covering circles
-        ``people_margin`` m clear of every disc along its roll-out, and for
-        ``people_horizon`` s after it (the chair standing at its end), so that it never
-        stops where a walker is about to be. If no trajectory can, the chair takes the
-        one clear of static obstacles that stays farthest from people and walls, the
-        nearer of the two counting (``evading``)."""
+        ``people_margin`` m clear of every disc along its roll-out and for
+        ``people_horizon`` s after it (the chair braking to a stop on it,
+        :meth:`people_gap`), so that it never stops where a walker is about to be. If no
+        trajectory can, the chair is ``evading``, and each way is scored by the nearer of
+        walls and people, people judged both walking on and standing where they are (a
+        person who sees the chair in the way stops): if the chair is moving and could
+        still stop clear of where people stand, it slows as hard as the window allows,
+        on the best-scored arc of that speed; otherwise it takes the slowest of the ways
+        scored about as well as the best."""
         path = np.asarray(path, dtype=float).reshape(-1, 2)
         if not len(path) or not np.isfinite(path).all():
             raise ValueError("path must be a non-empty (K, 2) array of finite map points (m)")
         lp = self.local
         samples = self.window(velocity)
-        check = self.check(costmap, pose, samples)
+        check = self.check(costmap, pose, samples, stopping=True)
         poses, clearance, needed = check.poses, check.clearance, check.needed
+        gap_now = float(clearance[:, 0, 0].min() - needed)
         worst = costmap.cost.ravel()[check.cells].max(axis=(0, 2))
         valid = check.valid.copy()
 
@@ -199,6 +216,9 @@ class DwaPlanner:
         ends = poses[:, -1]
         fronts = ends[:, :2] + lp.heading_lookahead * np.column_stack(
             [np.cos(ends[:, 2]), np.sin(ends[:, 2])])
+        x0, y0 = poses[0, 0, :2]
+        if math.hypot(path[-1, 0] - x0, path[-1, 1] - y0) < self.forward_point_within:
+            fronts = ends[:, :2].copy()  # near the goal the forward point only overshoots
         points = np.concatenate([ends[:, :2], fronts])  # both points of every sample
         p_rows, p_cols = costmap.xy_to_cell(points[:, 0], points[:, 1])
         inside = costmap.contains(p_rows, p_cols).reshape(2, -1).all(axis=0)
@@ -213,14 +233,31 @@ class DwaPlanner:
         valid &= inside
         evading = False
         if people is not None and len(people):
-            gap = self.people_gap(pose, samples, np.asarray(people, float), people_horizon)
+            walking = np.asarray(people, float)
+            gap = self.people_gap(pose, samples, walking, people_horizon)
             clear_of_people = gap > people_margin
             if valid.any() and not (valid & clear_of_people).any():
                 # the way that keeps farthest from both: a chair that flees a person
                 # only to graze a wall, with the wheels' lag behind the command, hits it
                 evading = True
                 wall_gap = clearance.min(axis=(0, 2)) - needed
-                score = np.where(valid, np.minimum(gap, wall_gap), -np.inf)
+                # people judged twice, walking on and standing where they are: a person
+                # who sees the chair in the way stops, and a way clear only of where
+                # they would have walked runs into where they stand
+                standing = walking.copy()
+                standing[:, 2:4] = 0.0
+                standing_gap = self.people_gap(pose, samples, standing, people_horizon)
+                score = np.where(valid, np.minimum(np.minimum(gap, standing_gap), wall_gap),
+                                 -np.inf)
+                if velocity[0] > 0.05 and (valid & (standing_gap > people_margin)).any():
+                    # the chair could stop clear of where people are, but not of where
+                    # they walk: slow down as hard as the window allows, steering for
+                    # the widest gap
+                    slowest = valid & (samples[:, 0] <= samples[valid, 0].min())
+                    best = int(np.argmax(np.where(slowest, score, -np.inf)))
+                    return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])),
+                                     samples, poses, valid, np.where(valid, cost, np.inf),
+                                     best, evading, terms, gap_now)
                 # of the ways about as good as the best, the slowest: standing off
                 # rather than driving on when driving on gains nothing
                 near_best = score >= score.max() - costmap.resolution
@@ -230,19 +267,27 @@ class DwaPlanner:
                 # of the chair off the checked arc, into a wall beside it
                 return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])),
                                  samples, poses, valid, np.where(valid, cost, np.inf), best,
-                                 evading, terms)
+                                 evading, terms, gap_now)
             valid &= clear_of_people
         cost = np.where(valid, cost, np.inf)
         if not valid.any():
-            return DwaResult(Twist(0.0, 0.0), samples, poses, valid, cost, -1, terms=terms)
+            return DwaResult(Twist(0.0, 0.0), samples, poses, valid, cost, -1, terms=terms,
+                             gap=gap_now)
         best = int(np.argmin(cost))
         return DwaResult(Twist(float(samples[best, 0]), float(samples[best, 1])), samples,
-                         poses, valid, cost, best, evading, terms)
+                         poses, valid, cost, best, evading, terms, gap_now)
 
-    def check(self, costmap: Costmap, pose: PoseLike, samples: np.ndarray) -> FootprintCheck:
+    def check(self, costmap: Costmap, pose: PoseLike, samples: np.ndarray,
+              stopping: bool = False) -> FootprintCheck:
         """Roll each ``(v, w)`` of ``samples`` (S, 2) out from ``pose`` for ``sim_time``
         and check the footprint's covering circles along it against ``costmap``'s
-        lethal and unknown cells (module notes, step 3)."""
+        lethal and unknown cells (module notes, step 3). With ``stopping``, the way the
+        chair would stop after taking the sample (:meth:`stopping_paths`) must be clear
+        too: the dynamic window's "admissible" velocities, from which the robot can
+        still stop before an obstacle (Fox, Burgard and Thrun 1997). A
+        second of constant speed is not enough: at 0.8 m/s the wheels' lag and braking
+        at 0.8 m/s^2 take 0.9 m, so a chair that finds no way clear the cycle after
+        taking one slides past what the second covered."""
         lp = self.local
         reach = np.abs(samples).max(axis=0) * lp.sim_time
         steps = max(1, math.ceil(max(reach[0] / lp.sim_granularity,
@@ -268,7 +313,37 @@ class DwaPlanner:
             clear &= np.minimum.reduce(outline) > slack
         else:
             clear = nearest > needed
-        return FootprintCheck(poses, cells, near, needed, clear.all(axis=1))
+        valid = clear.all(axis=1)
+        if stopping and here > needed and valid.any():
+            lp, period = self.local, 1.0 / self.frequency
+            horizon = (period + self.braking_delay
+                       + float(np.abs(samples[:, 0]).max()) / lp.acc_lim_x)
+            _, paths = self.stopping_paths(pose, samples[valid], horizon)
+            _, stop_near = _clearance_of(costmap, clearance, paths, self._circles)
+            valid[valid] = (np.minimum.reduce(stop_near) > needed).all(axis=1)
+        return FootprintCheck(poses, cells, near, needed, valid)
+
+    def stopping_paths(self, pose: PoseLike, samples: np.ndarray, horizon: float,
+                       dt: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+        """``(times (T,), poses (S, T, 3))``: the chair holding each ``(v, w)`` sample for
+        one control period and ``braking_delay`` s more (the wheels' lag behind a stop
+        command), then braking to a stop at ``acc_lim_x`` and ``acc_lim_theta`` along its
+        way, and standing, until ``horizon`` s, sampled every ``dt`` s."""
+        lp, period = self.local, 1.0 / self.frequency
+        x0, y0, th0 = (pose.x, pose.y, pose.theta) if isinstance(pose, Pose2D) else pose
+        times = np.arange(0.0, max(horizon, period) + dt / 2, dt)  # (T,)
+        braking = np.maximum(times - period - self.braking_delay, 0.0)
+        v = np.maximum(samples[:, :1] - lp.acc_lim_x * braking, 0.0)  # (S, T): v >= 0
+        w = np.sign(samples[:, 1:]) * np.maximum(
+            np.abs(samples[:, 1:]) - lp.acc_lim_theta * braking, 0.0)
+        theta = th0 + np.concatenate([np.zeros((len(samples), 1)),
+                                      np.cumsum(w[:, :-1] * dt, axis=1)], axis=1)
+        step_x, step_y = v * np.cos(theta) * dt, v * np.sin(theta) * dt
+        x = x0 + np.concatenate([np.zeros((len(samples), 1)),
+                                 np.cumsum(step_x[:, :-1], axis=1)], axis=1)
+        y = y0 + np.concatenate([np.zeros((len(samples), 1)),
+                                 np.cumsum(step_y[:, :-1], axis=1)], axis=1)
+        return times, np.stack([x, y, theta], axis=-1)
 
     def people_gap(self, pose: PoseLike, samples: np.ndarray, people: np.ndarray,
                     horizon: float, dt: float = 0.05) -> np.ndarray:
@@ -284,20 +359,8 @@ class DwaPlanner:
         and Asama, "Inevitable collision states - a step towards safer robots?",
         Advanced Robotics 18(10), 2004), and a chair driving on at constant speed
         towards a walker's path reaches one before its constant-speed arcs show it."""
-        lp, period = self.local, 1.0 / self.frequency
-        x0, y0, th0 = (pose.x, pose.y, pose.theta) if isinstance(pose, Pose2D) else pose
-        times = np.arange(0.0, max(horizon, period) + dt / 2, dt)  # (T,)
-        braking = np.maximum(times - period - self.braking_delay, 0.0)
-        v = np.maximum(samples[:, :1] - lp.acc_lim_x * braking, 0.0)  # (S, T): v >= 0
-        w = np.sign(samples[:, 1:]) * np.maximum(
-            np.abs(samples[:, 1:]) - lp.acc_lim_theta * braking, 0.0)
-        theta = th0 + np.concatenate([np.zeros((len(samples), 1)),
-                                      np.cumsum(w[:, :-1] * dt, axis=1)], axis=1)
-        step_x, step_y = v * np.cos(theta) * dt, v * np.sin(theta) * dt
-        x = x0 + np.concatenate([np.zeros((len(samples), 1)),
-                                 np.cumsum(step_x[:, :-1], axis=1)], axis=1)
-        y = y0 + np.concatenate([np.zeros((len(samples), 1)),
-                                 np.cumsum(step_y[:, :-1], axis=1)], axis=1)
+        times, stopping = self.stopping_paths(pose, samples, horizon, dt)
+        x, y, theta = stopping[..., 0], stopping[..., 1], stopping[..., 2]
         c, s = np.cos(theta)[..., None], np.sin(theta)[..., None]
         cx = x[..., None] + c * self._circles[:, 0] - s * self._circles[:, 1]  # (S, T, C)
         cy = y[..., None] + s * self._circles[:, 0] + c * self._circles[:, 1]

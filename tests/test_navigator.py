@@ -161,7 +161,9 @@ def test_a_person_walking_head_on_down_a_corridor_is_never_touched():
 def test_a_walker_turning_back_towards_a_following_chair_is_never_touched():
     """The chair follows a walker down the corridor; the walker turns round where its
     path ends (taking the time a person takes to turn) and walks back towards the
-    chair, which keeps clear of them."""
+    chair, which keeps clear of them: more than DWA's people_margin (0.1 m) from the
+    chair's outline. (Evading, the chair now brakes and stands aside while the walker
+    passes, 0.13 m away; it used to swerve on at speed, 0.29 m away.)"""
     ahead = {"name": "walker", "path": [[2.2, 1.5], [12.0, 1.5]], "speed": 0.9,
              "radius": 0.25, "loop": False}
     chair = SimBase(_corridor([ahead]), seed=2, lidar=True)
@@ -176,7 +178,7 @@ def test_a_walker_turning_back_towards_a_following_chair_is_never_touched():
         if not navigator.running:
             break
     assert frame.collisions == 0
-    assert closest > 0.15
+    assert closest > 0.1
     assert navigator.status is Status.SUCCEEDED, navigator.failure
 
 

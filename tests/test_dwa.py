@@ -1,6 +1,7 @@
 """The DWA local planner: exact arcs, the dynamic window, and no trajectory into a wall."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ import pytest
 from abcwc.geometry import transform_points
 from abcwc.navigation.costmap import FREE_SPACE, LETHAL, Costmap, chair_footprint, footprint_cost
 from abcwc.navigation.dwa import DwaPlanner, covering_circles, roll_out
-from abcwc.params import default_params
+from abcwc.params import default_params, load_navigation_params
 
 FOOTPRINT = chair_footprint(default_params())
 
@@ -67,6 +68,9 @@ def corridor(wall_x=None):
 
 
 PATH = np.column_stack([np.linspace(0.0, 2.4, 60), np.zeros(60)])
+# the navigator's limits (NavigatorSettings): never backwards, 0.8 m/s, 0.8 m/s^2, 0.8 rad/s
+NAVIGATOR_LIMITS = replace(load_navigation_params().local_planner, min_vel_x=0.0,
+                           max_vel_x=0.8, acc_lim_x=0.8, max_vel_theta=0.8)
 
 
 def test_it_follows_the_path_down_a_clear_corridor():
@@ -203,13 +207,7 @@ def test_evading_it_steers_for_the_widest_gap_to_people_walking_on_or_standing()
     rates it takes the one whose nearest gap, to the walker walked on, to the walker
     standing where they are, or to a wall, is widest (each recomputed here with
     people_gap and the footprint check)."""
-    from dataclasses import replace
-
-    from abcwc.params import load_navigation_params
-
-    local = replace(load_navigation_params().local_planner, min_vel_x=0.0, max_vel_x=0.8,
-                    acc_lim_x=0.8, max_vel_theta=0.8)
-    planner = DwaPlanner(FOOTPRINT, local=local)
+    planner = DwaPlanner(FOOTPRINT, local=NAVIGATOR_LIMITS)
     walker = np.array([[1.6, -0.6, -0.9, 0.0, 0.25]])
     standing = walker.copy()
     standing[:, 2:4] = 0.0
@@ -244,15 +242,10 @@ def test_a_goal_just_ahead_is_driven_to_not_stood_short_of():
     with the navigator's limits (no reversing, 0.8 m/s^2). The forward point (0.325 m
     ahead of each trajectory's end) would pass the goal and score driving on as no better
     than stopping; near the goal only the end counts, and the chair drives on to it."""
-    from dataclasses import replace
-
-    from abcwc.params import load_navigation_params
-
-    local = replace(load_navigation_params().local_planner, min_vel_x=0.0, max_vel_x=0.8,
-                    acc_lim_x=0.8)
     costmap = Costmap.rolling_window((0.0, 0.0, 0.0), 5.0, 0.05, default=FREE_SPACE)
     path = np.column_stack([np.linspace(-0.5, 0.3, 17), np.zeros(17)])
-    result = DwaPlanner(FOOTPRINT, local=local).plan(costmap, (0.0, 0.0, 0.0), (0.1, 0.0), path)
+    result = DwaPlanner(FOOTPRINT, local=NAVIGATOR_LIMITS).plan(costmap, (0.0, 0.0, 0.0),
+                                                                (0.1, 0.0), path)
     assert result.command.v > 0.1
     end = result.poses[result.best, -1, :2]
     assert math.hypot(*(end - path[-1])) < 0.15
@@ -263,13 +256,7 @@ def test_a_way_counts_only_if_the_chair_can_still_stop_on_it():
     braking delay): the nearest wall that the second at constant speed clears and the
     nearest that the stop clears lie apart by what stopping adds, the closed form
     v (period + delay) + v^2 / (2 a) - v * sim_time = 0.56 + 0.40 - 0.80 = 0.16 m."""
-    from dataclasses import replace
-
-    from abcwc.params import load_navigation_params
-
-    local = replace(load_navigation_params().local_planner, min_vel_x=0.0, max_vel_x=0.8,
-                    acc_lim_x=0.8, max_vel_theta=0.8)
-    planner = DwaPlanner(FOOTPRINT, local=local, braking_delay=0.5)
+    planner = DwaPlanner(FOOTPRINT, local=NAVIGATOR_LIMITS, braking_delay=0.5)
     ahead = np.array([[0.8, 0.0]])
     walls = np.arange(1.3, 2.0, 0.01)
 
@@ -279,5 +266,5 @@ def test_a_way_counts_only_if_the_chair_can_still_stop_on_it():
                                      stopping=stopping).valid[0])
 
     period = 1.0 / planner.frequency
-    extra = 0.8 * (period + 0.5) + 0.8**2 / (2 * 0.8) - 0.8 * local.sim_time
+    extra = 0.8 * (period + 0.5) + 0.8**2 / (2 * 0.8) - 0.8 * NAVIGATOR_LIMITS.sim_time
     assert nearest_clear(True) - nearest_clear(False) == pytest.approx(extra, abs=0.05)

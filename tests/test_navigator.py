@@ -90,6 +90,13 @@ def test_cancel_stops_the_chair():
     assert math.hypot(chair.pose.x - before.x, chair.pose.y - before.y) < 0.005
 
 
+def _one_sample_result(command: Twist, gap: float = math.inf) -> DwaResult:
+    """A DWA cycle that chose ``command``, its only sample, with the footprint ``gap`` m
+    from what it may not come nearer."""
+    return DwaResult(command, np.zeros((1, 2)), np.zeros((1, 1, 3)), np.ones(1, bool),
+                     np.zeros(1), 0, gap=gap)
+
+
 def test_the_safety_filter_cannot_be_bypassed(monkeypatch):
     """A local planner gone wrong (always full ahead) still never reaches the wall."""
     chair = SimBase("floor", seed=2, lidar=True, people=False, errors="ideal")
@@ -97,8 +104,7 @@ def test_the_safety_filter_cannot_be_bypassed(monkeypatch):
     navigator.go_to("cafeteria")  # the reckless planner drives straight on, east
 
     def reckless(*args, **kwargs) -> DwaResult:
-        return DwaResult(Twist(0.8, 0.0), np.zeros((1, 2)), np.zeros((1, 1, 3)),
-                         np.ones(1, bool), np.zeros(1), 0)
+        return _one_sample_result(Twist(0.8, 0.0))
 
     monkeypatch.setattr(navigator.dwa, "plan", reckless)
     chair_start = chair.pose
@@ -287,8 +293,7 @@ def test_near_obstacles_the_speed_is_scaled_down_along_the_same_arc(gap, cap):
     navigator = Navigator.for_world(SimBase("floor", seed=0, people=False).world)
     s = navigator.settings
     assert (s.max_vel_x, s.slow_within, s.narrow_speed) == (0.8, 0.3, 0.3)
-    result = DwaResult(Twist(0.8, 0.4), np.zeros((1, 2)), np.zeros((1, 1, 3)),
-                       np.ones(1, bool), np.zeros(1), 0, gap=gap)
+    result = _one_sample_result(Twist(0.8, 0.4), gap=gap)
     command = navigator._regulated(result, Pose2D(3.0, 9.0, 0.0))
     assert command.v == pytest.approx(cap)
     assert command.w / command.v == pytest.approx(0.5)
@@ -302,8 +307,7 @@ def test_near_a_person_the_speed_is_scaled_down_along_the_same_arc(monkeypatch):
     navigator = Navigator.for_world(SimBase("floor", seed=0, people=False).world)
     s = navigator.settings
     pose = Pose2D(3.0, 9.0, 0.0)
-    result = DwaResult(Twist(0.8, 0.4), np.zeros((1, 2)), np.zeros((1, 1, 3)),
-                       np.ones(1, bool), np.zeros(1), 0)
+    result = _one_sample_result(Twist(0.8, 0.4))
     for x in (4.6, 5.2, 8.0):
         person = np.array([[x, 9.0, 0.0, 0.0, 0.25]])
         monkeypatch.setattr(navigator.people, "moving_discs", lambda person=person: person)

@@ -63,6 +63,7 @@ from scipy import ndimage
 
 from abcwc.geometry import PoseLike
 from abcwc.navigation.costmap import LETHAL, Costmap, Footprint
+from abcwc.navigation.people import standing_still
 from abcwc.params import LocalPlannerParams, NavigationParams, load_navigation_params
 from abcwc.types import Pose2D, Twist
 
@@ -134,6 +135,12 @@ class FootprintCheck:
     clearance: np.ndarray
     needed: float
     valid: np.ndarray
+
+    @property
+    def gap(self) -> float:
+        """m the covering circles could come nearer an obstacle where they are now
+        before the check refuses them (< 0: already nearer)."""
+        return float(self.clearance[:, 0, 0].min() - self.needed)
 
 
 class DwaPlanner:
@@ -208,7 +215,7 @@ class DwaPlanner:
         samples = self.window(velocity)
         check = self.check(costmap, pose, samples, stopping=True)
         poses, clearance, needed = check.poses, check.clearance, check.needed
-        gap_now = float(clearance[:, 0, 0].min() - needed)
+        gap_now = check.gap
         worst = costmap.cost.ravel()[check.cells].max(axis=(0, 2))
         valid = check.valid.copy()
 
@@ -244,9 +251,8 @@ class DwaPlanner:
                 # people judged twice, walking on and standing where they are: a person
                 # who sees the chair in the way stops, and a way clear only of where
                 # they would have walked runs into where they stand
-                standing = walking.copy()
-                standing[:, 2:4] = 0.0
-                standing_gap = self.people_gap(pose, samples, standing, people_horizon)
+                standing_gap = self.people_gap(pose, samples, standing_still(walking),
+                                               people_horizon)
                 score = np.where(valid, np.minimum(np.minimum(gap, standing_gap), wall_gap),
                                  -np.inf)
                 if velocity[0] > 0.05 and (valid & (standing_gap > people_margin)).any():
@@ -315,8 +321,7 @@ class DwaPlanner:
             clear = nearest > needed
         valid = clear.all(axis=1)
         if stopping and here > needed and valid.any():
-            lp, period = self.local, 1.0 / self.frequency
-            horizon = (period + self.braking_delay
+            horizon = (1.0 / self.frequency + self.braking_delay
                        + float(np.abs(samples[:, 0]).max()) / lp.acc_lim_x)
             _, paths = self.stopping_paths(pose, samples[valid], horizon)
             _, stop_near = _clearance_of(costmap, clearance, paths, self._circles)

@@ -59,7 +59,7 @@ from abcwc.navigation.costmap import (
 )
 from abcwc.navigation.dwa import DwaPlanner, DwaResult
 from abcwc.navigation.localization import MapLocalizer, occupied_points, wall_points
-from abcwc.navigation.people import PeopleTracker, predicted_sweep
+from abcwc.navigation.people import PeopleTracker, predicted_sweep, standing_still
 from abcwc.navigation.planner import NoPathError, Path, plan
 from abcwc.navigation.range_layer import RangeSensorLayer
 from abcwc.params import ChairParams, default_params, load_navigation_params
@@ -383,9 +383,8 @@ class Navigator(BehaviourBase):
         cap = max(s.narrow_speed, s.max_vel_x * max(result.gap, 0.0) / s.slow_within)
         discs = self.people.moving_discs()
         if len(discs):
-            standing = discs.copy()
-            standing[:, 2:4] = 0.0
-            near = float(self.dwa.people_gap(pose, np.zeros((1, 2)), standing, 0.0)[0])
+            near = float(self.dwa.people_gap(pose, np.zeros((1, 2)), standing_still(discs),
+                                             0.0)[0])
             cap = min(cap, s.people_speed + (s.max_vel_x - s.people_speed)
                       * min(max(near, 0.0) / s.people_slow_within, 1.0))
         if command.v <= cap:

@@ -156,6 +156,14 @@ class PeopleTracker:
         return np.array(rows, dtype=float).reshape(-1, 5)
 
 
+def standing_still(discs: np.ndarray) -> np.ndarray:
+    """(M, 5): the moving discs (x, y, vx, vy, radius) as they would be if each person
+    stopped where they are: a person who sees the chair in the way may do just that."""
+    standing = np.array(discs, dtype=float).reshape(-1, 5)
+    standing[:, 2:4] = 0.0
+    return standing
+
+
 def predicted_sweep(discs: np.ndarray, grid: GridGeometry, horizon: float,
                     min_speed: float = 0.2) -> np.ndarray:
     """(height, width) bool on ``grid``: the cells each moving disc ((M, 5): x, y, vx, vy,

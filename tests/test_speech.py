@@ -163,13 +163,32 @@ def test_a_command_inside_a_sentence_is_refused(recogniser):
     assert spotting.accepted and spotting.command.phrase == "stop"
 
 
-def test_word_ratio_counts_phones_pro_rata():
+def test_word_ratio_is_against_the_best_state_in_each_frame():
     from abcwc.perception.speech.recognizer import word_log_likelihood_ratio
 
-    # phones: frames 0-9 (-20), 10-19 (-40), 20-39 (-10); the word spans frames 5-24
-    phones = np.array([[-20.0, 0, 9], [-40.0, 10, 19], [-10.0, 20, 39]])
-    free = -20 * 5 / 10 - 40 - 10 * 5 / 20
-    assert word_log_likelihood_ratio(-80.0, 5, 24, phones) == pytest.approx((-80 - free) / 20)
+    # three frames, four states; the word's alignment visits states 0, 0, 2
+    scores = np.array([[-1.0, -3.0, -2.0, -9.0],     # best -1: the word's state is best
+                       [-4.0, -2.0, -6.0, -5.0],     # best -2: the word's is 2 worse
+                       [-7.0, -8.0, -5.0, -1.0]])    # best -1: the word's is 4 worse
+    assert word_log_likelihood_ratio(scores, np.array([0, 0, 2])) == pytest.approx(-2.0)
+    assert word_log_likelihood_ratio(scores, np.array([0, 1, 3])) == 0.0
+
+
+def test_a_words_ratio_does_not_depend_on_the_rest_of_the_grammar(recogniser):
+    """Each frame is scored against the best of all the model's states, not the best
+    the grammar's search visited: the same words in the same audio score the same with
+    one place or with many (scored against the best state the search visited, "go to
+    the lab" in the en-gb voice scored 1.0 per frame higher with one place)."""
+    from abcwc.perception.speech.recognizer import CommandRecognizer
+
+    one_place = CommandRecognizer(CommandSet(["lab"]))
+    for phrase, voice in (("go to the lab", "en-gb"), ("turn left", "en-us+f4")):
+        audio = say(phrase, voice)
+        alone, among_many = one_place.recognise(audio), recogniser.recognise(audio)
+        assert alone.phrase == among_many.phrase == phrase
+        # the words' boundaries may move by a frame or two; their mean stays
+        assert alone.mean_llr == pytest.approx(among_many.mean_llr, abs=0.05)
+        assert all(ratio < 0 for _, ratio in alone.word_llrs)
 
 
 def test_speech_outside_the_command_is_measured_by_energy():

@@ -2,18 +2,18 @@
 
 Exercises:
 
-* ``word_ratio(score, first, last, phones)``: the per-frame log-likelihood ratio of a
-  word aligned to frames ``first``..``last`` (inclusive) with log likelihood ``score``,
-  against the free phone sequence ``phones`` ((N, 3) rows: log likelihood, first frame,
-  last frame) over the same frames, a phone partly inside counting pro rata;
+* ``word_ratio(scores, aligned)``: the per-frame log-likelihood ratio of a word against
+  the best state in each frame, from ``scores`` (T, S), the log likelihood of each of
+  the model's S states in each of the word's T frames, and ``aligned`` (T,), the state
+  the word's alignment gives each frame;
 * ``predicted_false_activations()``: two percentages written down *before* the run
   that measures them: how many of the conversation sentences fire a command when the
   command may be anywhere in what was said, with the thesis's single words and with its
   two-word commands;
 * ``chosen_mean_threshold()``: the words' mean ratio a command must reach, read off the
   tuning voices' plot, judged on voices and sentences the notebook never used: at most
-  2 % of the sentences may pass as commands, and at least 45 % of the commands must be
-  recognised.
+  2 % of the sentences may pass as commands, and at least a quarter of the commands
+  must be recognised.
 
 Each ``reference_*`` function is an answer the notebook falls back on; a check handed
 the library's own function (or a ``reference_*``) says so instead of passing.
@@ -43,77 +43,76 @@ __all__ = [
 
 MAX_FALSE_ACTIVATIONS = 0.02
 """Of the unseen sentences, the share that may pass as commands."""
-MIN_RECOGNISED = 0.45
+MIN_RECOGNISED = 0.25
 """Of the unseen commands, the share that must be recognised."""
 HELD_OUT_SEED = 400
 
 
-def reference_word_ratio(score: float, first: int, last: int, phones: np.ndarray) -> float:
+def reference_word_ratio(scores: np.ndarray, aligned: np.ndarray) -> float:
     """The ratio (:func:`abcwc.perception.speech.recognizer.word_log_likelihood_ratio`)."""
-    return word_log_likelihood_ratio(score, first, last, np.asarray(phones, dtype=float))
+    return word_log_likelihood_ratio(scores, aligned)
 
 
 # --- exercise 1: the word's likelihood ratio ------------------------------------------------
 
 
-def ratio_cases() -> list[tuple[float, int, int, np.ndarray]]:
-    """(score, first, last, phones): hand-made and seeded random alignments."""
-    hand = np.array([[-20.0, 0, 9], [-40.0, 10, 19], [-10.0, 20, 39]])
-    cases = [(-80.0, 5, 24, hand), (-60.0, 10, 19, hand), (-15.0, 0, 4, hand)]
+def ratio_cases() -> list[tuple[np.ndarray, np.ndarray]]:
+    """(scores, aligned): a hand-made word and seeded random ones."""
+    hand = np.array([[-1.0, -3.0, -2.0, -9.0],
+                     [-4.0, -2.0, -6.0, -5.0],
+                     [-7.0, -8.0, -5.0, -1.0]])
+    cases = [(hand, np.array([0, 0, 2])), (hand, np.array([1, 1, 3]))]
     rng = np.random.default_rng(4)
     for _ in range(6):
-        edges = np.cumsum(rng.integers(3, 12, 12))
-        starts = np.concatenate([[0], edges[:-1] + 1])
-        phones = np.column_stack([-rng.uniform(2, 8, 12) * (edges - starts + 1), starts,
-                                  edges])
-        first = int(rng.integers(2, 30))
-        last = first + int(rng.integers(8, 40))
-        score = float(-rng.uniform(3, 9) * (last - first + 1))
-        cases.append((score, first, last, phones))
+        frames, states = int(rng.integers(6, 40)), int(rng.integers(8, 60))
+        scores = -rng.gamma(2.0, 4.0, (frames, states)) - rng.uniform(20, 60)
+        word_states = rng.choice(states, 3, replace=False)
+        cases.append((scores, np.sort(rng.choice(word_states, frames))))
     return cases
 
 
-def _slips(score: float, first: int, last: int, phones: np.ndarray) -> dict[str, float]:
+def _slips(scores: np.ndarray, aligned: np.ndarray) -> dict[str, float]:
     """What the usual slips give for one case."""
-    frames = last - first + 1
-    start, end = phones[:, 1], phones[:, 2]
-    touching = (np.minimum(end, last) - np.maximum(start, first) + 1) > 0
-    within = (start >= first) & (end <= last)
-    exact = reference_word_ratio(score, first, last, phones)
+    frames = np.arange(len(aligned))
+    own = scores[frames, aligned]
+    exact = reference_word_ratio(scores, aligned)
+    peak = scores.max(axis=1, keepdims=True)
+    together = (peak[:, 0] + np.log(np.exp(scores - peak).sum(axis=1)))
     return {
-        "every phone that touches the word counted whole; a phone partly inside counts "
-        "pro rata (its score times the share of its frames inside)":
-            (score - phones[touching, 0].sum()) / frames,
-        "only the phones wholly inside the word were counted; the ones partly inside "
-        "count too, pro rata": (score - phones[within, 0].sum()) / frames,
-        "the ratio is the word's score less the phones', not the other way round":
+        "each frame is compared with its own best state, not with the best score of the "
+        "whole word (take the maximum along the states, axis 1)":
+            float(np.mean(own - scores.max())),
+        "compare with the best of all the model's states, not only the word's own":
+            float(np.mean(own - scores[:, np.unique(aligned)].max(axis=1))),
+        "compare with the best state, not with all states together (that log-sum is a "
+        "posterior, another measure)": float(np.mean(own - together)),
+        "the ratio is the word's score less the best state's, not the other way round":
             -exact,
-        "that is the ratio for the whole word; divide by its number of frames for a "
-        "ratio per frame": exact * frames,
-        "the word spans last - first + 1 frames (both ends count)":
-            exact * frames / (frames - 1),
+        "that is the ratio for the whole word; take the mean over its frames for a "
+        "ratio per frame": exact * len(aligned),
+        "the best state has the largest log likelihood (the maximum, not the minimum)":
+            float(np.mean(own - scores.min(axis=1))),
     }
 
 
 @checker("word ratio")
 def word_ratio_check(fn: Callable) -> str:
-    """``fn(score, first, last, phones)`` against the pro-rata ratio and the slips."""
+    """``fn(scores, aligned)`` against the ratio and the slips."""
     expect_own(fn, reference_word_ratio, word_log_likelihood_ratio)
     cases = ratio_cases()
-    for score, first, last, phones in cases:
-        expected = reference_word_ratio(score, first, last, phones)
-        got = fn(score, first, last, phones.copy())
+    for scores, aligned in cases:
+        expected = reference_word_ratio(scores, aligned)
+        got = fn(scores.copy(), aligned.copy())
         expect(isinstance(got, (int, float, np.floating)) and math.isfinite(float(got)),
                f"word_ratio gave {format_value(got)}; return one finite number")
         if abs(float(got) - expected) <= 1e-9 * max(1.0, abs(expected)):
             continue
-        for slip, wrong in _slips(score, first, last, phones).items():
+        where = f"a word of {len(aligned)} frames among {scores.shape[1]} states"
+        for slip, wrong in _slips(scores, aligned).items():
             if abs(float(got) - wrong) <= 1e-9 * max(1.0, abs(wrong)):
-                raise NotYet(f"frames {first}-{last}: {float(got):.3f}, expected "
-                             f"{expected:.3f}: {slip}")
-        raise NotYet(f"a word over frames {first}-{last} with score {score:.1f} gave "
-                     f"{float(got):.3f}, expected {expected:.3f} per frame")
-    return f"{len(cases)} alignments, each word's ratio per frame right"
+                raise NotYet(f"{where}: {float(got):.3f}, expected {expected:.3f}: {slip}")
+        raise NotYet(f"{where} gave {float(got):.3f}, expected {expected:.3f} per frame")
+    return f"{len(cases)} words, each one's ratio per frame right"
 
 
 # --- exercise 2: predict the false activations ----------------------------------------------
@@ -148,8 +147,8 @@ def prediction_check(predicted: Callable[[], tuple[float, float]], single: float
 
 @lru_cache(maxsize=1)
 def held_out_trials():  # noqa: ANN201 - a list of speech_trials.Trial, imported lazily
-    """The house commands and the held-out sentences, said by three of the held-out
-    voices, decoded once with no verification (``Verification.none()``), and the
+    """The house commands and the held-out sentences, said by the five held-out voices,
+    decoded once with no verification (``Verification.none()``), and the
     recogniser that decoded them."""
     from abcwc.experiments.speech_trials import TEST_DISTRACTORS, floor_commands, run_trials
     from abcwc.perception.speech.recognizer import CommandRecognizer, Verification
@@ -158,7 +157,7 @@ def held_out_trials():  # noqa: ANN201 - a list of speech_trials.Trial, imported
     commands = floor_commands()
     recogniser = CommandRecognizer(commands, Verification.none())
     trials = run_trials(recogniser, commands.phrases, list(TEST_DISTRACTORS),
-                        TEST_VOICES[:3], seed=HELD_OUT_SEED)
+                        TEST_VOICES, seed=HELD_OUT_SEED)
     return trials, recogniser
 
 
@@ -172,8 +171,8 @@ def threshold_check(chosen: Callable[[], float]) -> str:
     value = chosen()
     expect(isinstance(value, (int, float)) and math.isfinite(value),
            f"chosen_mean_threshold() gave {format_value(value)}; return one number")
-    expect(value <= 0, f"{value:g} is above 0: a ratio per frame of a word against the free "
-           "phones is at most about 0, so nothing would pass")
+    expect(value <= 0, f"{value:g} is above 0: a word's ratio per frame against the best "
+           "state in each frame is at most 0, so nothing would pass")
     trials, recogniser = held_out_trials()
     judged = judged_again(trials, recogniser, Verification(min_mean_llr=float(value)))
     found = rates(judged)
@@ -187,7 +186,8 @@ def threshold_check(chosen: Callable[[], float]) -> str:
         raise NotYet(f"at {value:.2f} only {100 * found.recognised:.0f} % of the commands "
                      f"in new voices are recognised (at least {100 * MIN_RECOGNISED:.0f} % "
                      "needed): the threshold refuses most commands as well as the "
-                     "sentences")
-    return (f"{value:.2f} on three voices and {found.distractors // 3} sentences never "
+                     "sentences; the sentences that score highest are often refused by "
+                     "the weakest-word and outside-speech checks already")
+    return (f"{value:.2f} on five voices and {found.distractors // 5} sentences never "
             f"used: {100 * found.recognised:.0f} % of the commands recognised, "
             f"{100 * found.false_activations:.1f} % of the sentences taken for commands")

@@ -5,7 +5,7 @@ A grammar alone always answers: every sound becomes the command it is least unli
 So each answer is checked twice before the chair obeys it.
 
 1. **The words are the command's.** In every 10 ms frame the acoustic model scores each
-   of its states (5138 senones for the en-us model), and the best of them is the best
+   of its states (5126 senones for the en-us model), and the best of them is the best
    that any sound could do there. Over each word of the grammar's answer, the per-frame
    log-likelihood ratio between the word's alignment and those best states,
 

@@ -37,6 +37,30 @@ TEST_DISTRACTORS = (
     "the corridor is long", "what time is lunch", "put it on my left",
     "the lift is out of order", "go to sleep",
 )
+ENROLLMENT_SENTENCES = (
+    "the quick brown fox jumps over the lazy dog", "she sells sea shells by the sea shore",
+    "a large red book lay open on the kitchen table",
+    "we watched the boats sail past the harbor wall",
+    "my brother plays the guitar every thursday evening",
+    "the children laughed at the funny clown", "please put the cups and plates in the cupboard",
+    "the weather will be warm and sunny tomorrow",
+    "he drove his old van along the narrow country road",
+    "an orange cat slept quietly under the chair",
+    "they built a small wooden bridge across the stream",
+    "our teacher showed us pictures of the moon",
+    "the farmer sold fresh eggs and milk at the market",
+    "a cold wind blew through the empty streets", "she wrote a long letter to her grandmother",
+    "the train was late because of the snow",
+    "good food and good friends make a happy evening",
+    "the doctor asked him to breathe slowly", "two young birds were singing in the garden",
+    "the museum opens early on saturday morning",
+    "he could hear the waves crashing on the rocks",
+    "the shop sells shoes hats and warm jackets",
+    "my neighbour grows tomatoes beans and peppers",
+    "the pilot checked the engine before the flight",
+)
+"""What a speaker reads to enroll (``adaptation.enroll``): ordinary sentences covering
+the phones of English, none a command or a distractor."""
 FLOOR_PLACES = ("office_a", "lab", "store", "cafeteria", "lift", "meeting", "library",
                 "reading", "corridor_east")
 
@@ -117,6 +141,12 @@ def rates(trials: list[Trial]) -> Rates:
                  else float("nan"),
                  audio / decode if decode > 0 else float("nan"), len(commands),
                  len(distractors))
+
+
+def enrollment_readings(voice: Voice, seed: int = 900) -> list[tuple[np.ndarray, str]]:
+    """``ENROLLMENT_SENTENCES`` read by ``voice`` in a quiet room: (audio, text) pairs."""
+    return [(utterance(text, voice, None, seed + k), text)
+            for k, text in enumerate(ENROLLMENT_SENTENCES)]
 
 
 def floor_commands() -> CommandSet:

@@ -41,11 +41,14 @@ other voices and sentences.
 from __future__ import annotations
 
 import math
+import os
+import tempfile
 import time
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from abcwc.perception.speech.adaptation import MeanTransform
 from abcwc.perception.speech.audio import SAMPLE_RATE, to_float_audio, to_int16, with_noise_floor
 from abcwc.perception.speech.commands import CommandSet, SpokenCommand
 
@@ -151,23 +154,35 @@ class Verification:
 class CommandRecognizer:
     """pocketsphinx with the ``commands`` grammar and the checks of ``verification``.
 
-    ``recognise(samples, rate)`` takes one utterance (int16, or float in [-1, 1]; any
-    rate from 8 to 96 kHz) and returns a ``Recognition``. Bad buffers raise
-    ``AudioError`` with what is allowed."""
+    ``adaptation``, a speaker's ``MeanTransform`` (``adaptation.enroll``), moves the
+    acoustic model's means to that speaker's voice. ``recognise(samples, rate)`` takes
+    one utterance (int16, or float in [-1, 1]; any rate from 8 to 96 kHz) and returns a
+    ``Recognition``. Bad buffers raise ``AudioError`` with what is allowed."""
 
     def __init__(self, commands: CommandSet, verification: Verification = Verification(),
-                 noise_floor_seed: int = 0) -> None:
+                 noise_floor_seed: int = 0, adaptation: MeanTransform | None = None
+                 ) -> None:
         from pocketsphinx import Decoder
 
         if not isinstance(verification, Verification):
             raise ValueError(f"verification must be a Verification, got "
                              f"{type(verification).__name__}")
+        if adaptation is not None and not isinstance(adaptation, MeanTransform):
+            raise ValueError(f"adaptation must be a MeanTransform (from "
+                             f"abcwc.perception.speech.adaptation.enroll), got "
+                             f"{type(adaptation).__name__}")
         hmm, dictionary = _model_paths()
         self.commands = commands
         self.verification = verification
         self.noise_floor_seed = noise_floor_seed
-        self._grammar = Decoder(hmm=hmm, dict=dictionary, lm=None, samprate=SAMPLE_RATE,
-                                compallsen=True, loglevel="FATAL")
+        self.adaptation = adaptation
+        with tempfile.TemporaryDirectory() as work:
+            extra = {}
+            if adaptation is not None:  # pocketsphinx reads the file as it starts
+                extra["mllr"] = os.path.join(work, "speaker.mllr")
+                adaptation.write(extra["mllr"])
+            self._grammar = Decoder(hmm=hmm, dict=dictionary, lm=None, samprate=SAMPLE_RATE,
+                                    compallsen=True, loglevel="FATAL", **extra)
         unknown = sorted(w for w in commands.words() if self._grammar.lookup_word(w) is None)
         if unknown:
             raise ValueError(f"not in the pronunciation dictionary: {', '.join(unknown)}; "

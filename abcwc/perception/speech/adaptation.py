@@ -77,7 +77,8 @@ def _model_dir() -> str:
 def _read_gaussian_file(path: str) -> np.ndarray:
     """A SphinxTrain s3 parameter file (means or variances) as (codebooks, streams,
     Gaussians, 13)."""
-    data = open(path, "rb").read()
+    with open(path, "rb") as file:
+        data = file.read()
     start = data.index(b"endhdr\n") + len(b"endhdr\n")
     if int(np.frombuffer(data[start:start + 4], "<u4")[0]) != 0x11223344:
         raise ValueError(f"{path}: not a little-endian s3 parameter file")
@@ -102,7 +103,8 @@ def model_gaussians() -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
 
 def _base_phones(mdef: str) -> tuple[str, ...]:
     """The base phone names of a binary model definition, in their order."""
-    data = open(mdef, "rb").read()
+    with open(mdef, "rb") as file:
+        data = file.read()
     at = data.index(b"END FILE FORMAT DESCRIPTION\n") + len(b"END FILE FORMAT DESCRIPTION\n")
     at = (at + 3) // 4 * 4
     count = int(np.frombuffer(data[at:at + 4], "<i4")[0])
@@ -199,6 +201,12 @@ def enroll(readings: Sequence[tuple[np.ndarray, str]], rate: int = SAMPLE_RATE,
     return transform
 
 
+def _decode(decoder: object, pcm: bytes) -> None:
+    decoder.start_utt()
+    decoder.process_raw(pcm, full_utt=True)
+    decoder.end_utt()
+
+
 def _aligned_segments(pcm: bytes, text: str, folder: str, dictionary: str,
                       mllr: str | None, phones: tuple[str, ...]
                       ) -> list[tuple[int, np.ndarray]]:
@@ -212,13 +220,10 @@ def _aligned_segments(pcm: bytes, text: str, folder: str, dictionary: str,
                       mfclogdir=folder, loglevel="FATAL", **extra)
     aligner.set_align_text(text)
     try:
-        for _ in range(2):  # words first, then phones and states within them
-            aligner.start_utt()
-            aligner.process_raw(pcm, full_utt=True)
-            aligner.end_utt()
-            if _ == 0:
-                aligner.set_alignment()
-    except RuntimeError:
+        _decode(aligner, pcm)        # the words' places
+        aligner.set_alignment()
+        _decode(aligner, pcm)        # then their phones' and states' within them
+    except RuntimeError:             # the text cannot be fitted to the sound
         return []
     cepstra = np.fromfile(sorted(glob.glob(f"{folder}/*.mfc"))[-1], dtype=">f4", offset=4)
     features = sphinx_features(cepstra.reshape(-1, DIMENSIONS))

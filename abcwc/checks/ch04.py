@@ -26,6 +26,7 @@ from collections.abc import Callable
 from functools import lru_cache
 
 import numpy as np
+from scipy.special import logsumexp
 
 from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value, numbers
 from abcwc.perception.speech.recognizer import word_log_likelihood_ratio
@@ -76,8 +77,7 @@ def _slips(scores: np.ndarray, aligned: np.ndarray) -> dict[str, float]:
     frames = np.arange(len(aligned))
     own = scores[frames, aligned]
     exact = reference_word_ratio(scores, aligned)
-    peak = scores.max(axis=1, keepdims=True)
-    together = (peak[:, 0] + np.log(np.exp(scores - peak).sum(axis=1)))
+    together = logsumexp(scores, axis=1)
     return {
         "each frame is compared with its own best state, not with the best score of the "
         "whole word (take the maximum along the states, axis 1)":

@@ -34,6 +34,7 @@ from functools import lru_cache
 import numpy as np
 
 from abcwc.perception.speech.audio import SAMPLE_RATE, to_float_audio, to_int16, with_noise_floor
+from abcwc.perception.speech.model import decoded, model_paths
 
 STREAMS, DIMENSIONS, GAUSSIANS = 3, 13, 128
 VARIANCE_FLOOR = 1.0e-4       # pocketsphinx's -varfloor
@@ -68,12 +69,6 @@ class MeanTransform:
             out.write("\n".join(lines) + "\n")
 
 
-def _model_dir() -> str:
-    from pocketsphinx import get_model_path
-
-    return f"{get_model_path()}/en-us/en-us"
-
-
 def _read_gaussian_file(path: str) -> np.ndarray:
     """A SphinxTrain s3 parameter file (means or variances) as (codebooks, streams,
     Gaussians, 13)."""
@@ -95,7 +90,7 @@ def _read_gaussian_file(path: str) -> np.ndarray:
 def model_gaussians() -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
     """The en-us model's means and (floored) variances, (42, 3, 128, 13) each, and its
     base phones in codebook order."""
-    model = _model_dir()
+    model, _ = model_paths()
     means = _read_gaussian_file(f"{model}/means")
     variances = np.maximum(_read_gaussian_file(f"{model}/variances"), VARIANCE_FLOOR)
     return means, variances, _base_phones(f"{model}/mdef")
@@ -178,8 +173,8 @@ def enroll(readings: Sequence[tuple[np.ndarray, str]], rate: int = SAMPLE_RATE,
     if not readings:
         raise ValueError("enroll needs sentences the speaker read: (audio, text) pairs")
     means, variances, phones = model_gaussians()
-    dictionary = _model_dir().rsplit("/", 1)[0] + "/cmudict-en-us.dict"
-    checker = Decoder(hmm=_model_dir(), dict=dictionary, lm=None, loglevel="FATAL")
+    model, dictionary = model_paths()
+    checker = Decoder(hmm=model, dict=dictionary, lm=None, loglevel="FATAL")
     unknown = sorted({w for _, text in readings for w in text.lower().split()
                       if checker.lookup_word(w) is None})
     if unknown:
@@ -196,19 +191,13 @@ def enroll(readings: Sequence[tuple[np.ndarray, str]], rate: int = SAMPLE_RATE,
             segments = []
             for j, (pcm, (_, text)) in enumerate(zip(pcms, readings)):
                 segments += _aligned_segments(pcm, text.lower(), os.path.join(work, f"{k}-{j}"),
-                                              dictionary, mllr, phones)
+                                              mllr, phones)
             transform = estimate_mean_transform(segments, means, variances, transform)
     return transform
 
 
-def _decode(decoder: object, pcm: bytes) -> None:
-    decoder.start_utt()
-    decoder.process_raw(pcm, full_utt=True)
-    decoder.end_utt()
-
-
-def _aligned_segments(pcm: bytes, text: str, folder: str, dictionary: str,
-                      mllr: str | None, phones: tuple[str, ...]
+def _aligned_segments(pcm: bytes, text: str, folder: str, mllr: str | None,
+                      phones: tuple[str, ...]
                       ) -> list[tuple[int, np.ndarray]]:
     """(codebook, features) of each speech phone of ``text`` aligned to ``pcm``; none
     when the aligner cannot fit the text."""
@@ -216,13 +205,14 @@ def _aligned_segments(pcm: bytes, text: str, folder: str, dictionary: str,
 
     os.makedirs(folder)
     extra = {"mllr": mllr} if mllr else {}
-    aligner = Decoder(hmm=_model_dir(), dict=dictionary, lm=None, samprate=SAMPLE_RATE,
+    model, dictionary = model_paths()
+    aligner = Decoder(hmm=model, dict=dictionary, lm=None, samprate=SAMPLE_RATE,
                       mfclogdir=folder, loglevel="FATAL", **extra)
     aligner.set_align_text(text)
     try:
-        _decode(aligner, pcm)        # the words' places
+        decoded(aligner, pcm)        # the words' places
         aligner.set_alignment()
-        _decode(aligner, pcm)        # then their phones' and states' within them
+        decoded(aligner, pcm)        # then their phones' and states' within them
     except RuntimeError:             # the text cannot be fitted to the sound
         return []
     cepstra = np.fromfile(sorted(glob.glob(f"{folder}/*.mfc"))[-1], dtype=">f4", offset=4)

@@ -51,16 +51,10 @@ import numpy as np
 from abcwc.perception.speech.adaptation import MeanTransform
 from abcwc.perception.speech.audio import SAMPLE_RATE, to_float_audio, to_int16, with_noise_floor
 from abcwc.perception.speech.commands import CommandSet, SpokenCommand
+from abcwc.perception.speech.model import decoded, model_paths
 
 FRAME_RATE = 100          # pocketsphinx's feature frames per second
 SPEECH_ABOVE_FLOOR_DB = 12.0
-
-
-def _model_paths() -> tuple[str, str]:
-    from pocketsphinx import get_model_path
-
-    model = get_model_path()
-    return f"{model}/en-us/en-us", f"{model}/en-us/cmudict-en-us.dict"
 
 
 @dataclass(frozen=True)
@@ -171,7 +165,7 @@ class CommandRecognizer:
             raise ValueError(f"adaptation must be a MeanTransform (from "
                              f"abcwc.perception.speech.adaptation.enroll), got "
                              f"{type(adaptation).__name__}")
-        hmm, dictionary = _model_paths()
+        hmm, dictionary = model_paths()
         self.commands = commands
         self.verification = verification
         self.noise_floor_seed = noise_floor_seed
@@ -216,20 +210,11 @@ class CommandRecognizer:
     def _decode_words(self, pcm: bytes) -> tuple[str, list[tuple[str, float, int, int]]]:
         """The grammar's phrase and its words: (word, log acoustic score relative to each
         frame's best state, first and last frame)."""
-        d = _decoded(self._grammar, pcm)
+        d = decoded(self._grammar, pcm)
         hyp = d.hyp()
         words = [(_base_word(s.word), _log(s.ascore), s.start_frame, s.end_frame)
                  for s in (d.seg() or []) if not _is_filler(s.word)]
         return (hyp.hypstr if hyp else ""), words
-
-
-def _decoded(decoder: object, pcm: bytes) -> object:
-    """``decoder`` after decoding ``pcm`` as one whole utterance (its hypothesis and
-    segments ready to read)."""
-    decoder.start_utt()
-    decoder.process_raw(pcm, full_utt=True)
-    decoder.end_utt()
-    return decoder
 
 
 def _log(probability: float) -> float:

@@ -207,9 +207,9 @@ def bench_navigator() -> dict[str, float]:
         command = navigator(frame)
         spent = time.perf_counter() - before
         thinking += spent
-        if navigator._decided_at == frame.t:  # noqa: SLF001 - a decision was taken
+        if navigator.decided_at == frame.t:  # a decision was taken
             decisions.append(spent * 1000)
-        chair.send(command)
+        chair.send(command, navigator.decided_at)
         frame = chair.step()
         periods += 1
     wall = time.perf_counter() - start

@@ -42,8 +42,13 @@ CHANNELS = {
     "ir": "(N, 6) m, the ir_0_link..ir_5_link readings",
     "joystick": "(N, 2) joystick ADC, fb and lr (pot scale)",
     "pots": "(N, 2) pot bytes the board put on the motor controller, fb and lr",
-    "cmd_pots": "(N, 2) pot bytes the host sent, -1 where it sent nothing",
-    "cmd_twist": "(N, 2) the Twist the host asked for (v, w), NaN where it sent none",
+    "cmd_pots": "(N, 2) pot bytes the host sent (after the safety filter), -1 where it "
+                "sent nothing",
+    "cmd_twist": "(N, 2) the Twist the host sent (v, w; after the safety filter), NaN "
+                 "where it sent none or sent pot bytes",
+    "wanted_twist": "(N, 2) the Twist the controller wanted (v, w; before the safety "
+                    "filter), NaN where it wanted none or wanted pot bytes",
+    "safety": "what the safety filter changed in the command, and why ('' where nothing)",
     "flags": "StatusFlags bits",
     "bad_frames": "bad serial frames so far",
     "pose": "(N, 3) ground truth x, y, theta (NaN on a real chair)",
@@ -165,15 +170,23 @@ class RunLog:
         steps = np.diff(self.pose[:, :2], axis=0)
         return float(np.hypot(steps[:, 0], steps[:, 1]).sum())
 
+    def safety_interventions(self) -> int:
+        """How many commands the safety filter changed (0 without a ``safety`` channel)."""
+        reasons = self.channels.get("safety")
+        return 0 if reasons is None else int(np.count_nonzero(reasons != ""))
+
     def summary(self) -> str:
-        """One line: duration, distance (when the truth is known), collisions."""
+        """One line: duration, distance (when the truth is known), collisions, and the
+        commands the safety filter changed, if any."""
         if len(self) == 0:
             return "empty log: 0 rows"
         driven = (f"{self.distance_travelled():.2f} m driven" if self.has_ground_truth
                   else "distance driven: unknown (no ground truth)")
         collisions = self.channels.get("collisions")
         hits = int(collisions[-1]) if collisions is not None else 0
-        return f"{self.t[-1] - self.t[0] + self.period:.1f} s, {driven}, {hits} collisions"
+        line = f"{self.t[-1] - self.t[0] + self.period:.1f} s, {driven}, {hits} collisions"
+        changed = self.safety_interventions()
+        return line + (f", {changed} commands changed by the safety filter" if changed else "")
 
     # ---------------------------------------------------------------- files
     def save(self, path: str | Path) -> Path:
@@ -244,14 +257,24 @@ class LogRecorder:
         self._ir_width = 6
         self._scans: dict[str, list[LaserScan]] = {}
         self._extra: dict[str, dict[int, float]] = {}
+        self._safety: list[str] = []
+        self._wanted: list[tuple[float, float]] = []
 
     def add(self, frame: SensorFrame, command: PotCommand | Twist | None,
-            sent_pots: PotCommand | None) -> None:
-        """Record one period: the frame after it, the command sent, its pot bytes."""
+            sent_pots: PotCommand | None, wanted: PotCommand | Twist | None = None,
+            safety: str | None = None) -> None:
+        """Record one period: the frame after it, the command sent, its pot bytes, the
+        command the controller wanted (default: the one sent) and what the safety
+        filter changed (None: nothing)."""
         pose = frame.pose
         twist = command if isinstance(command, Twist) else None
+        wanted = command if wanted is None else wanted
+        wanted_twist = wanted if isinstance(wanted, Twist) else None
         ir = frame.ir
         self._ir_width = len(ir)
+        self._safety.append(safety or "")
+        self._wanted.append((wanted_twist.v, wanted_twist.w) if wanted_twist
+                            else (np.nan, np.nan))
         self._rows.append((
             frame.t, frame.ticks_left, frame.ticks_right, frame.gyro_z, frame.sonar,
             frame.joystick_fb, frame.joystick_lr, frame.pot_fb, frame.pot_lr,
@@ -282,6 +305,8 @@ class LogRecorder:
             "ir": a[:, 19:], "joystick": as_int([5, 6]), "pots": as_int([7, 8]),
             "cmd_pots": as_int([9, 10]), "cmd_twist": a[:, 11:13], "flags": as_int(13),
             "bad_frames": as_int(14), "pose": a[:, 15:18], "collisions": as_int(18),
+            "wanted_twist": np.array(self._wanted, dtype=float).reshape(-1, 2),
+            "safety": np.array(self._safety, dtype=str),
         }
         for frame_id, values in self._extra.items():
             column = np.full(len(a), np.nan)

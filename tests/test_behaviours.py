@@ -137,7 +137,7 @@ def test_a_goal_behaviour_at_5_hz_still_reaches_its_goal():
 def test_the_square_driver_succeeds_after_four_legs():
     sim = SimBase("lab", seed=0, people=False)
     driver = SquareDriver(Odometry(sim.params, start=sim.pose), side=1.0)
-    sim.run(driver, 40.0)
+    sim.run(driver, 45.0)
     assert driver.status is Status.SUCCEEDED and driver.leg == 4
     assert math.hypot(driver.pose.x - driver.start.x, driver.pose.y - driver.start.y) < 0.02
 

@@ -15,6 +15,7 @@ import threading
 import time
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from abcwc.base import Base
@@ -74,11 +75,11 @@ def test_connect_step_and_twist_gives_controller_pots(realtime_chair):
         assert [round(f.t, 3) for f in frames] == [0.02, 0.04, 0.06, 0.08, 0.1]
         assert (frames[-1].pot_fb, frames[-1].pot_lr) == (128, 128)
         for twist in (Twist(0.6, -0.4), Twist(-0.3, 0.9), Twist(1.2, 0.0)):
-            log = chair.drive(twist, 0.1)
+            log = chair.drive(twist, 0.1, safety=None)  # the wire's encoding, unfiltered
             want = twist_to_pot_command(twist)
             assert (chair.frame.pot_fb, chair.frame.pot_lr) == (want.fb, want.lr), twist
             assert tuple(log.cmd_pots[-1]) == (want.fb, want.lr)
-        chair.drive(PotCommand(255, 0), 0.06)  # clamped into the safe range
+        chair.drive(PotCommand(255, 0), 0.06, safety=None)  # clamped into the safe range
         frame = chair.read()
         assert (frame.pot_fb, frame.pot_lr) == (253, 8)
         assert frame.extras["host_active"] and frame.flags & StatusFlags.SPEED_CAPPED
@@ -97,6 +98,7 @@ def test_speed_cap_defaults_to_env_or_40(realtime_chair, monkeypatch):
         sb.default_speed_cap()
     monkeypatch.setenv(sb.SPEED_CAP_ENV, "30")
     with SerialBase(realtime_chair.pty) as chair:
+        chair.safety = None  # the firmware's own cap, under any host
         chair.drive(Twist(1.5, 0.0), 0.1)
         assert chair.frame.pot_fb == 128 + 30
         assert chair.frame.extras["cap"] == (30, 30)
@@ -106,6 +108,21 @@ def test_speed_cap_defaults_to_env_or_40(realtime_chair, monkeypatch):
         assert chair.frame.pot_fb == 128 - 10
         with pytest.raises(ValueError):
             chair.set_speed_cap(126)
+
+
+def test_the_real_chair_body_passes_every_command_through_its_safety_filter(realtime_chair):
+    """Over serial as in the simulator: a Twist beyond the comfort limits goes out capped
+    and ramped, and the RunLog says what the filter changed."""
+    with connect(realtime_chair.pty, speed_cap=125) as chair:
+        log = chair.drive(Twist(1.5, 0.0), 0.5)
+        limits = chair.safety.limits
+        sent = log.cmd_twist[:, 0]
+        assert (sent <= limits.max_speed).all() and sent[0] < 0.01  # capped, from rest
+        assert np.all(np.diff(sent) <= limits.max_accel * chair.period + 1e-9)
+        assert (log.wanted_twist[:, 0] == 1.5).all()
+        assert all(reason == "speed limit" for reason in log.safety)
+        want = twist_to_pot_command(Twist(sent[-1], 0.0))
+        assert tuple(log.cmd_pots[-1]) == (want.fb, want.lr)
 
 
 def test_killed_harness_mid_run_raises_within_half_a_second(realtime_chair):
@@ -207,6 +224,7 @@ def fil(harness_files):
 
     chair = FirmwareInLoopBase(BOX, seed=3, errors=ChairErrors.ideal(), people=False,
                                build=False)
+    chair.safety = None  # these tests hold the firmware to its own rules, under any host
     yield chair
     chair.close()
 

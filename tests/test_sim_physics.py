@@ -1,4 +1,7 @@
-"""Physics a test can trust: straight lines, spins, encoder truth, a curving chair."""
+"""Physics a test can trust: straight lines, spins, encoder truth, a curving chair.
+
+The chairs here are bare (``safety = None``): these tests measure the simulator's
+physics under the commands as given, not the safety filter's ramps and stops."""
 
 from __future__ import annotations
 
@@ -13,8 +16,14 @@ from abcwc.types import Pose2D, PotCommand, Twist
 from tests.conftest import noise_free
 
 
+def bare(chair: SimBase) -> SimBase:
+    """``chair`` with its safety filter taken away."""
+    chair.safety = None
+    return chair
+
+
 def ideal_chair(**options) -> SimBase:
-    return SimBase(world=box_world(), errors="ideal", params=noise_free(), **options)
+    return bare(SimBase(world=box_world(), errors="ideal", params=noise_free(), **options))
 
 
 def test_equal_pots_drive_straight_over_5_m():
@@ -65,7 +74,7 @@ def test_two_percent_wheel_diameter_error_curves_as_predicted(params):
     # right tyre 2 % larger: v_r = 1.02 v_l, so the path bends left with radius
     # R = (b / 2) (v_r + v_l) / (v_r - v_l) = (0.44 / 2) * 2.02 / 0.02 = 22.22 m.
     errors = ChairErrors(drive_wheel_right=1.02)
-    chair = SimBase(world=box_world(80, 80), errors=errors, params=noise_free())
+    chair = bare(SimBase(world=box_world(80, 80), errors=errors, params=noise_free()))
     log = chair.run(lambda f: PotCommand(200, 128), 30.0)
     steady = log.t > 2.0
     pose = log.pose[steady]
@@ -100,7 +109,7 @@ def test_motor_lag_and_delay_shape_the_step_response(params):
 
 
 def test_collision_with_a_wall_is_counted():
-    chair = SimBase(world=box_world(6, 6), errors="ideal", start=Pose2D(3, 3, 0))
+    chair = bare(SimBase(world=box_world(6, 6), errors="ideal", start=Pose2D(3, 3, 0)))
     log = chair.run(lambda f: PotCommand(253, 128), 6.0)
     assert log.collisions[-1] >= 1
     assert chair.collision_impulse > 0
@@ -116,14 +125,14 @@ def test_walkers_move_and_sensors_see_them():
         "places": {"start": [5, 10, 0]},
         "people": [{"path": [[8, 10], [8.01, 10]], "speed": 0.01, "radius": 0.25}],
     })
-    chair = SimBase(world=world, errors="ideal", params=noise_free())
+    chair = bare(SimBase(world=world, errors="ideal", params=noise_free()))
     sonar_x = 5 + chair.params.sonar.mount[0]
     assert chair.frame.sonar == pytest.approx(8 - 0.25 - sonar_x, abs=0.002)
 
 
 def test_same_seed_same_run_and_other_seed_differs():
     def drive(seed):
-        chair = SimBase(seed=seed)
+        chair = bare(SimBase(seed=seed))
         return chair.run(lambda f: Twist(0.5, 0.2 * math.sin(f.t)), 5.0)
 
     a, b, c = drive(3), drive(3), drive(4)
@@ -148,7 +157,7 @@ def test_a_walker_stops_for_a_chair_in_its_way_and_then_turns_back():
     from abcwc.sim.people import LOOK_AHEAD, TURN_TIME, WAIT_PATIENCE
 
     world = _box_with_walker([10, 10, math.pi / 2], [[6, 10], [18, 10]], 1.0)
-    chair = SimBase(world=world, errors="ideal", params=noise_free())
+    chair = bare(SimBase(world=world, errors="ideal", params=noise_free()))
     walker = chair.walkers[0]
     gaps, xs = [], []
     for _ in range(round(8.0 / chair.period)):
@@ -169,7 +178,7 @@ def test_a_walker_bumped_from_the_side_stops_instead_of_shoving_the_chair():
     from abcwc.sim.people import BUMP_PAUSE
 
     world = _box_with_walker([10, 8.0, math.pi / 2], [[6, 10], [18, 10]], 0.5)
-    chair = SimBase(world=world, errors="ideal", params=noise_free())
+    chair = bare(SimBase(world=world, errors="ideal", params=noise_free()))
     walker = chair.walkers[0]
     poses, walker_x, collisions = [], [], []
     for _ in range(round(12.0 / chair.period)):
@@ -198,7 +207,7 @@ def test_a_walker_keeps_a_passing_clearance_from_the_chair(offset, passes):
     assert 0.05 < PASSING_CLEARANCE < 0.2
     side = 10.0 - 0.241 - 0.25 - offset  # the walker's centre line
     world = _box_with_walker([10, 10, math.pi / 2], [[side, 6], [side, 18]], 1.0)
-    chair = SimBase(world=world, errors="ideal", params=noise_free())
+    chair = bare(SimBase(world=world, errors="ideal", params=noise_free()))
     walker = chair.walkers[0]
     for _ in range(round(8.0 / chair.period)):
         frame = chair.step()

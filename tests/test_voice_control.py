@@ -53,7 +53,7 @@ def test_the_wall_stops_a_spoken_drive_forward():
     control = VoiceControl(CommandSet(chair.world.places))
     drive(chair, control, {0.1: "drive forward"}, 9.0)
     assert chair.collisions == 0
-    assert control.safety.interventions                         # the filter stopped it
+    assert chair.safety.interventions["obstacle"]               # the loop's filter stopped it
 
 
 def test_go_to_a_place_hands_over_to_the_navigator_and_stop_cancels_it():

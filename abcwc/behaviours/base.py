@@ -17,6 +17,11 @@ reason), can be :meth:`~BehaviourBase.reset` to start over and
 Once the status is not running, the behaviour sends :meth:`~BehaviourBase.stop_command`
 (stand still) every period. Any plain function ``frame -> command`` is still a
 controller for ``Base.run``; a behaviour is a controller that also says when it is done.
+
+A behaviour does not apply the safety filter itself: the body's control loop passes
+every command through it (:mod:`abcwc.base`), stamped with the behaviour's
+:attr:`~BehaviourBase.decided_at`, so a command repeated long after its decision (a
+planner that stopped deciding) is stopped as stale.
 """
 
 from __future__ import annotations
@@ -51,6 +56,9 @@ class Behaviour(Protocol):
     def __call__(self, frame: SensorFrame) -> PotCommand | Twist: ...
     def reset(self) -> None: ...
     def cancel(self) -> None: ...
+
+    @property
+    def decided_at(self) -> float | None: ...
 
     @property
     def status(self) -> Status: ...
@@ -97,6 +105,7 @@ class BehaviourBase:
         self._failure: str | None = None
         self._next_decision = -math.inf
         self._last_command: PotCommand | Twist | None = None
+        self._decided_at: float | None = None
 
     # --- what a behaviour reports
     @property
@@ -108,6 +117,12 @@ class BehaviourBase:
     def failure(self) -> str | None:
         """Why it failed (``"cancelled"`` after :meth:`cancel`), or None."""
         return self._failure
+
+    @property
+    def decided_at(self) -> float | None:
+        """s, the frame time of the decision the latest command came from (None before
+        the first): the safety filter stops a command decided too long ago."""
+        return self._decided_at
 
     @property
     def running(self) -> bool:
@@ -149,14 +164,17 @@ class BehaviourBase:
         self._status, self._failure = Status.RUNNING, None
         self._next_decision = -math.inf
         self._last_command = None
+        self._decided_at = None
 
     def __call__(self, frame: SensorFrame) -> PotCommand | Twist:
         self.observe(frame)
         if not self.running:
+            self._decided_at = frame.t
             return self.stop_command()
         if (self.rate_hz < LOOP_RATE_HZ and self._last_command is not None
                 and frame.t + _CLOCK_SLACK < self._next_decision):
             return self._last_command
+        self._decided_at = frame.t
         command = self.update(frame)
         if not self.running:  # update finished it: stop now, not a period later
             return self.stop_command()

@@ -60,8 +60,12 @@ chair never drives into them. Other people are tracked in the scan too (a
 velocities from an alpha-beta filter), and a command must leave the chair able to stop
 clear of where each will be within ``people_horizon`` s (the DWA planner's
 :meth:`~abcwc.navigation.dwa.DwaPlanner.people_gap`): a passer-by crossing in front is
-waited for, not met. Everything it sends passes through the
-:class:`~abcwc.control.safety.SafetyFilter`.
+waited for, not met. What the body's
+:class:`~abcwc.control.safety.SafetyFilter` will stop for is foreseen with its
+:class:`~abcwc.control.safety.ClearanceCheck`, and the window of commands is centred on
+what the chair is driven at now, read from the frame's pot bytes
+(:func:`~abcwc.control.velocity.pot_command_to_twist`: after the filter's ramp, ahead
+of the wheels' lag); every command then passes the filter in the control loop.
 """
 
 from __future__ import annotations
@@ -74,7 +78,8 @@ import numpy as np
 
 from abcwc.behaviours.base import BehaviourBase
 from abcwc.behaviours.landmark import PoseEstimator
-from abcwc.control.safety import SafetyFilter
+from abcwc.control.safety import ClearanceCheck
+from abcwc.control.velocity import pot_command_to_twist
 from abcwc.geometry import compose, transform_points, wrap_angle
 from abcwc.mapping.icp import scan_points
 from abcwc.navigation.costmap import FREE_SPACE, Costmap, chair_footprint
@@ -89,6 +94,7 @@ from abcwc.types import (
     CameraImage,
     LaserScan,
     Pose2D,
+    PotCommand,
     SensorFrame,
     Twist,
 )
@@ -156,17 +162,16 @@ class TagFollower(BehaviourBase):
             value = getattr(s, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
-        self.safety = SafetyFilter(p)
+        self.clearance = ClearanceCheck(p)  # what the body's safety filter will stop for
         nav = load_navigation_params()
         local = replace(nav.local_planner, max_vel_x=s.max_speed, min_vel_x=0.0,
                         max_vel_theta=s.max_turn_rate, vx_samples=8, vtheta_samples=21)
         self.planner = DwaPlanner(chair_footprint(p), nav, local, padding=s.padding,
-                                  braking_delay=self.safety.reaction_time)
+                                  braking_delay=self.clearance.reaction_time)
         self.reset()
 
     def reset(self) -> None:
         super().reset()
-        self.safety.reset()
         self.pose = Pose2D()
         self.sightings: list[Sighting] = []
         self.log: list[tuple[float, float, float, float, float, str]] = []
@@ -180,23 +185,16 @@ class TagFollower(BehaviourBase):
         self._side = 1.0
         self.others = PeopleTracker(None, None, max_extent=self.settings.max_extent,
                                     person_radius=self.settings.person_radius)
-        self._velocity = (0.0, 0.0)
-        self._decided_at = 0.0
+        self.driven_at = Twist(0.0, 0.0)  # what the pots drive the chair at, each decision
 
     # ---------------------------------------------------------------- every frame
     def observe(self, frame: SensorFrame) -> None:
         self.pose = self.estimator.update_frame(frame)
 
-    def __call__(self, frame: SensorFrame) -> Twist:
-        wanted = super().__call__(frame)
-        assert isinstance(wanted, Twist)
-        command = self.safety.apply(frame, wanted, self._decided_at)
-        self._velocity = (command.v, command.w)
-        return command
-
     # ---------------------------------------------------------------- 10 Hz
     def update(self, frame: SensorFrame) -> Twist:
-        self._decided_at = frame.t
+        self.driven_at = pot_command_to_twist(PotCommand(frame.pot_fb, frame.pot_lr),
+                                              self.params)
         s = self.settings
         self._predict(frame.t)
         image = frame.readings.get(CAMERA_FRAME)
@@ -328,7 +326,7 @@ class TagFollower(BehaviourBase):
         s = self.settings
         # no faster than can still stop in the gap left, after the chair's reaction time
         # T: v T + v^2 / (2 b) = gap (plus what the person draws away meanwhile)
-        b, lag = s.braking, self.safety.reaction_time
+        b, lag = s.braking, self.clearance.reaction_time
         stoppable = receding - b * lag + math.sqrt((b * lag) ** 2 + 2 * b * max(gap, 0.0))
         v = min(receding + s.k_gap * gap, stoppable) * max(math.cos(bearing), 0.0)
         return v, s.k_turn * bearing
@@ -365,13 +363,16 @@ class TagFollower(BehaviourBase):
         local = Costmap.rolling_window(Pose2D(), s.local_size, 0.05, default=FREE_SPACE)
         local.add_scan(scan, self.params.lidar.mount, obstacle_range=s.local_size / 2,
                        raytrace_range=s.local_size / 2)
-        samples = np.vstack([[wanted.v, wanted.w], self.planner.window(self._velocity)])
+        # the pots' bytes read back a little above the speed limit they were rounded from
+        moving = (min(self.driven_at.v, s.max_speed),
+                  min(max(self.driven_at.w, -s.max_turn_rate), s.max_turn_rate))
+        samples = np.vstack([[wanted.v, wanted.w], self.planner.window(moving)])
         samples[:, 0] = np.clip(samples[:, 0], 0.0, s.max_speed)
         # what the safety filter will let through: a range sensor seeing something
         # within braking distance ahead stops the wheels but not the turn, and a turn
         # on the spot sweeps the chair's corners where the arc did not
-        gap, _ = self.safety.clearance(frame, forward=True)
-        stopped = gap <= np.array([self.safety.braking_distance(max(v, self._velocity[0]))
+        gap, _ = self.clearance.clearance(frame, forward=True)
+        stopped = gap <= np.array([self.clearance.braking_distance(max(v, moving[0]))
                                    for v in samples[:, 0]])
         samples[stopped, 0] = 0.0
         valid = self.planner.check(local, Pose2D(), samples).valid
@@ -412,32 +413,23 @@ class ThesisFollower(BehaviourBase):
     """Appendix A.13's follower, to be measured against :class:`TagFollower`: at 10 Hz,
     while the tag is seen, ``v = 1000 (z_prev - z)`` and ``w = 1000 (x_prev - x)`` from
     the tag's position in the optical frame (m) in two successive images; a stop while
-    it is not. (A.13 subscribes to ViSP's tracker; here the same marker pose.) The
-    commands still pass through the safety filter: the chair is not let drive at
-    whatever the law asks."""
+    it is not. (A.13 subscribes to ViSP's tracker; here the same marker pose.) Its
+    commands pass the body's safety filter like every other: the chair is not let drive
+    at whatever the law asks."""
 
     def __init__(self, card: FollowCard, params: ChairParams | None = None):
         super().__init__(rate_hz=10.0)
         self.card = card
         self.params = params or default_params()
-        self.safety = SafetyFilter(self.params)
         self.reset()
 
     def reset(self) -> None:
         super().reset()
-        self.safety.reset()
         self._previous: np.ndarray | None = None
         self._last_image = -math.inf
-        self._decided_at = 0.0
         self.log: list[tuple[float, float, float, float, float, str]] = []
 
-    def __call__(self, frame: SensorFrame) -> Twist:
-        wanted = super().__call__(frame)
-        assert isinstance(wanted, Twist)
-        return self.safety.apply(frame, wanted, self._decided_at)
-
     def update(self, frame: SensorFrame) -> Twist:
-        self._decided_at = frame.t
         image = frame.readings.get(CAMERA_FRAME)
         if not isinstance(image, CameraImage) or image.stamp <= self._last_image:
             return self._last_command if isinstance(self._last_command, Twist) else Twist(0, 0)

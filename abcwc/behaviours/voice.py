@@ -3,14 +3,15 @@ behaviours behind the commands that need them.
 
 A heard command replaces the one before it, as in A.4:
 
-* a motion ("drive forward", "turn left", ...) is held, through the safety filter
-  (comfort limits, the sonar and IR stop, the joystick override), until the next
-  command or for ``hold_seconds`` (10 s), whichever comes first: a person who cannot
-  say "stop" in time is not driven into the far wall;
+* a motion ("drive forward", "turn left", ...) is held until the next command or for
+  ``hold_seconds`` (10 s), whichever comes first: a person who cannot say "stop" in
+  time is not driven into the far wall (and the body's safety filter, in the control
+  loop, ramps it, stops it short of what the sonar and IR see and gives way to the
+  joystick);
 * "stop" stands still, and cancels a goal or a follow;
-* "go to the <place>" hands the chair to the ``navigator`` (which has its own safety
-  filter), "follow me" to the ``follower``; when either ends the chair stands still
-  and ``last_outcome`` says how it ended.
+* "go to the <place>" hands the chair to the ``navigator``, "follow me" to the
+  ``follower``; when either ends the chair stands still and ``last_outcome`` says how
+  it ended.
 
 The behaviour never succeeds on its own: it listens until it is cancelled.
 """
@@ -20,7 +21,6 @@ from __future__ import annotations
 import math
 
 from abcwc.behaviours.base import Behaviour, BehaviourBase, positive_number
-from abcwc.control.safety import SafetyFilter
 from abcwc.perception.speech.commands import CommandSet, SpokenCommand
 from abcwc.types import SensorFrame, Twist
 
@@ -30,13 +30,11 @@ class VoiceControl(BehaviourBase):
     ``follower`` are optional; a command that needs one that is missing is refused."""
 
     def __init__(self, commands: CommandSet, navigator: Behaviour | None = None,
-                 follower: Behaviour | None = None, safety: SafetyFilter | None = None,
-                 hold_seconds: float = 10.0) -> None:
+                 follower: Behaviour | None = None, hold_seconds: float = 10.0) -> None:
         super().__init__()
         self.commands = commands
         self.navigator = navigator
         self.follower = follower
-        self.safety = safety or SafetyFilter()
         self.hold_seconds = positive_number("hold_seconds", hold_seconds, "s")
         self.heard: list[tuple[float, str]] = []  # (t, phrase) of every command obeyed
         self.last_outcome: str | None = None
@@ -50,8 +48,16 @@ class VoiceControl(BehaviourBase):
 
     def reset(self) -> None:
         super().reset()
-        self.safety.reset()
         self._reset_state()
+
+    @property
+    def decided_at(self) -> float | None:
+        """The decision time of the command sent: the navigator's or follower's while
+        one drives (so the safety filter sees how old their decision is), else this
+        behaviour's own."""
+        if self._delegate is not None and self._delegate.running:
+            return self._delegate.decided_at
+        return super().decided_at
 
     def hear(self, command: SpokenCommand | str) -> SpokenCommand:
         """Obey ``command`` (a recogniser's ``SpokenCommand``, or typed text, parsed by
@@ -84,7 +90,7 @@ class VoiceControl(BehaviourBase):
             self._delegate, self._wanted = None, Twist(0.0, 0.0)
         if frame.t - self._since > self.hold_seconds:
             self._wanted = Twist(0.0, 0.0)
-        return self.safety.apply(frame, self._wanted)
+        return self._wanted
 
     def _start(self, command: SpokenCommand, t: float) -> None:
         if self._delegate is not None and self._delegate.running:

@@ -124,11 +124,13 @@ def wander_check(make_controller: object) -> str:
     ``make_controller`` is a controller class (or a function returning a fresh
     controller; a controller itself is used as it is). A controller maps a
     SensorFrame to a PotCommand or Twist. It sees the sensors only: the ground-truth
-    pose is removed from every frame, as on the real chair. Each run must end with no
-    collision, at least :data:`WANDER_MIN_DISTANCE` metres driven and at least
-    :data:`WANDER_MIN_CELLS` different square metres of floor visited: a controller
-    that ignores its sensors collides (driving on) or goes nowhere (circling), and one
-    that always turns the same way turns into the wall beside it.
+    pose is removed from every frame, as on the real chair. The chair is bare (no
+    safety filter: ``run(..., safety=None)``), so the wanderer's own rule is what keeps
+    it off the walls. Each run must end with no collision, at least
+    :data:`WANDER_MIN_DISTANCE` metres driven and at least :data:`WANDER_MIN_CELLS`
+    different square metres of floor visited: a controller that ignores its sensors
+    collides (driving on) or goes nowhere (circling), and one that always turns the same
+    way turns into the wall beside it.
     """
     from abcwc.connect import connect
     from abcwc.sim.world import world_from_dict
@@ -139,7 +141,7 @@ def wander_check(make_controller: object) -> str:
         controller = _make_controller(make_controller)
         chair = connect(world=world_from_dict(HALL_WITH_PILLARS) if world == "hall" else world,
                         seed=seed, start=Pose2D(*start), people=False)
-        log = chair.run(_without_ground_truth(controller), WANDER_SECONDS)
+        log = chair.run(_without_ground_truth(controller), WANDER_SECONDS, safety=None)
         collisions = int(log.collisions[-1])
         distance = log.distance_travelled()
         cells = len({(math.floor(x), math.floor(y)) for x, y in log.pose[:, :2]})

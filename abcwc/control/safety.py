@@ -1,8 +1,14 @@
-"""The safety filter: every autonomous command passes through it on its way to the pots.
+"""The safety filter: every command from software passes through it on its way to the pots.
 
-A planner proposes; the filter disposes. At every control period (50 Hz) it takes the
-command an autonomous behaviour wants (a :class:`~abcwc.types.Twist`) and the newest
-:class:`~abcwc.types.SensorFrame`, and returns what may be sent. Its rules, in order:
+A planner proposes; the filter disposes. Every chair body owns one
+(:attr:`abcwc.base.BodyMixin.safety`) and its ``send`` passes each command through it,
+so every controller, behaviour and notebook cell is filtered in the one control loop,
+as Nav2's collision monitor sits between every controller and the base. At every
+control period (50 Hz) it takes the command wanted (a :class:`~abcwc.types.Twist` or a
+:class:`~abcwc.types.PotCommand`) and the newest :class:`~abcwc.types.SensorFrame`, and
+returns what may be sent. A teaching experiment that needs the bare chair asks for it
+by name (``chair.run(controller, seconds, safety=None)``). Its rules for a Twist, in
+order:
 
 1. **The joystick wins.** While the frame says the joystick drives the pots
    (``JOYSTICK_OVERRIDE``, the interface board's flag), the filter sends a stop and
@@ -28,14 +34,27 @@ command an autonomous behaviour wants (a :class:`~abcwc.types.Twist`) and the ne
    proportion to the speed, so the chair brakes along the way its planner checked.
    Stops by rules 1, 2 and 4 skip the ramp: the chair's own motor controller brakes.
 
+**Raw pot bytes** (a :class:`~abcwc.types.PotCommand`, chapter 01's bytes) get rules 1,
+2, 4 and the speed cap of rule 3, not the ramps of rule 5: the bytes are what the
+chapter teaches, and the motor controller's own lag (``motor_time_constant``) shapes
+them. The bytes are read as the steady speed the motor controller makes of them
+(:func:`~abcwc.control.velocity.pot_command_to_twist`); a byte beyond the one the
+velocity controller (:func:`~abcwc.control.velocity.twist_to_pot_command`) gives for a
+:class:`ComfortLimits` speed or turn rate is brought back to that byte; an
+obstacle stop puts the FB byte at neutral and keeps the LR byte (turning on the spot
+sweeps no strip ahead); a joystick or stale-command stop sends neutral pots.
+
 The braking distance comes from the chair's model (chair.toml): the sensing period, the
 motor controller's input delay and the wheels' first-order lag ``tau`` (a first-order
 lag stops from ``v`` in ``v tau``), plus ``stop_margin``::
 
     d_brake(v) = v (1 / sensor_rate + command_delay + tau) + stop_margin
 
-Where the filter changed a command, :attr:`SafetyFilter.reason` says why, and
-:attr:`SafetyFilter.interventions` counts each kind.
+Where the filter changed a command, :attr:`SafetyFilter.reason` says why (a control
+loop records it in the RunLog's ``safety`` channel), and
+:attr:`SafetyFilter.interventions` counts each kind. :class:`ClearanceCheck` is the
+geometry of rule 4 alone (the swept strip, the braking distance), for planners that
+must foresee what the filter will let through.
 """
 
 from __future__ import annotations
@@ -47,8 +66,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from abcwc.control.velocity import pot_command_to_twist, twist_to_pot_command
 from abcwc.params import ChairParams, default_params
-from abcwc.types import SONAR_FRAME, SensorFrame, StatusFlags, Twist
+from abcwc.types import SONAR_FRAME, PotCommand, SensorFrame, StatusFlags, Twist
 
 STOP_ON_ARC_ABOVE = 0.02
 """m/s: above this speed a wanted stop brakes along the present arc (rule 5)."""
@@ -116,10 +136,14 @@ def range_sensor_rays(params: ChairParams) -> dict[str, RangeSensorRay]:
     return rays
 
 
-class SafetyFilter:
-    """Apply :class:`ComfortLimits` and the stop rules to commands (module notes).
+class ClearanceCheck:
+    """Rule 4's geometry: how far the strip the chair sweeps ahead (or behind) is clear
+    by its range sensors, and how far it needs to stop (module notes).
 
-    Call :meth:`apply` once per control period with the frame and the wanted command.
+    ``reaction_time`` (s) is the sensing period, the motor controller's input delay and
+    the wheels' lag; :meth:`braking_distance` and :meth:`clearance` are what the safety
+    filter compares. Planners that must foresee the filter (the tag follower, the
+    navigator's back-off) use the same check.
     """
 
     def __init__(self, params: ChairParams | None = None,
@@ -128,21 +152,19 @@ class SafetyFilter:
         self.limits = limits or ComfortLimits()
         sensing = 1.0 / min(p.sonar.rate_hz, p.ir.rate_hz)
         self.reaction_time = sensing + p.command_delay + p.motor_time_constant  # s
-        self._rays = range_sensor_rays(p)
+        rays = range_sensor_rays(p)
+        self.frame_ids = tuple(rays)
+        mounts = np.array([ray.mount for ray in rays.values()], dtype=float)
+        half_angles = np.array([ray.half_angle for ray in rays.values()])
+        self._mount_xy = mounts[:, :2]
+        # each ray tried along its axis and both edges of its cone: (S, 3) yaws
+        self._yaws = mounts[:, 2:3] + half_angles[:, None] * np.array([-1.0, 0.0, 1.0])
+        self._facing = np.cos(mounts[:, 2])  # > 0: the sensor looks forward
+        self._min_ranges = np.array([ray.min_range for ray in rays.values()])
         self._front = p.length - p.axle_to_rear  # m, base_link to the front edge
         self._rear = p.axle_to_rear
         self._half_width = p.width / 2 + self.limits.side_margin
-        self.interventions: Counter[str] = Counter()
-        self.reset()
 
-    def reset(self) -> None:
-        """Forget the ramp (standing still) and the last reason."""
-        self.v = self.w = self.accel = 0.0
-        self.reason: str | None = None
-        self._released_at = -math.inf
-        self._overridden = False
-
-    # ------------------------------------------------------------------ the rules
     def braking_distance(self, speed: float) -> float:
         """m the chair travels after an obstacle is sensed at ``speed`` m/s, plus the
         stop margin (module notes)."""
@@ -151,47 +173,104 @@ class SafetyFilter:
     def clearance(self, frame: SensorFrame, forward: bool = True) -> tuple[float, str | None]:
         """The nearest range return in the strip the chair sweeps ahead (``forward``) or
         behind, as (m from the chair's front or rear edge; the frame id that saw it), or
-        ``(inf, None)``. A cone is tried along its axis and both edges."""
-        nearest, seen_by = math.inf, None
-        for frame_id, (mount, half_angle, min_range, _) in self._rays.items():
-            reading = frame.readings.get(frame_id, math.nan)
-            if reading is None or math.isnan(reading) or reading == math.inf:
-                continue
-            if reading == -math.inf or reading <= min_range:  # somewhere nearer than min
-                facing = math.cos(mount[2]) if forward else -math.cos(mount[2])
-                if facing >= 0.5 - 1e-9 and nearest > 0.0:
-                    nearest, seen_by = 0.0, frame_id
-                continue
-            distance = float(reading)
-            yaws = mount[2] + np.array([-half_angle, 0.0, half_angle])
-            x = mount[0] + distance * np.cos(yaws)
-            y = mount[1] + distance * np.sin(yaws)
-            ahead = (x - self._front) if forward else (-self._rear - x)
-            in_strip = (np.abs(y) <= self._half_width) & (ahead >= 0)
-            if in_strip.any() and ahead[in_strip].min() < nearest:
-                nearest, seen_by = float(ahead[in_strip].min()), frame_id
-        return nearest, seen_by
+        ``(inf, None)``. A cone is tried along its axis and both edges; a reading at or
+        below the sensor's minimum, from a sensor facing within 60 degrees of the way,
+        counts as touching (0 m)."""
+        readings = np.array([_range_of(frame.readings.get(frame_id))
+                             for frame_id in self.frame_ids])
+        with np.errstate(invalid="ignore"):
+            too_close = (readings == -np.inf) | (np.isfinite(readings)
+                                                 & (readings <= self._min_ranges))
+            facing = self._facing if forward else -self._facing
+            touching = too_close & (facing >= 0.5 - 1e-9)
+            if touching.any():
+                return 0.0, self.frame_ids[int(np.argmax(touching))]
+            measured = np.isfinite(readings) & ~too_close
+        if not measured.any():
+            return math.inf, None
+        distance = readings[measured][:, None]
+        x = self._mount_xy[measured, 0:1] + distance * np.cos(self._yaws[measured])
+        y = self._mount_xy[measured, 1:2] + distance * np.sin(self._yaws[measured])
+        ahead = (x - self._front) if forward else (-self._rear - x)
+        ahead = np.where((np.abs(y) <= self._half_width) & (ahead >= 0), ahead, np.inf)
+        nearest = int(np.argmin(ahead))  # ray-major: the first sensor wins a tie
+        if not math.isfinite(ahead.flat[nearest]):
+            return math.inf, None
+        seen_by = np.flatnonzero(measured)[nearest // ahead.shape[1]]
+        return float(ahead.flat[nearest]), self.frame_ids[seen_by]
 
-    def apply(self, frame: SensorFrame, command: Twist, decided_at: float | None = None
-              ) -> Twist:
+
+def _range_of(reading: object) -> float:
+    """A range reading as a float: NaN for none (or a reading that is not a range)."""
+    return float(reading) if isinstance(reading, (int, float)) else math.nan
+
+
+class SafetyFilter:
+    """Apply :class:`ComfortLimits` and the stop rules to commands (module notes).
+
+    Call :meth:`apply` once per control period with the frame and the wanted command;
+    a body does it in its ``send``. :attr:`check` is the :class:`ClearanceCheck` the
+    obstacle stop uses.
+    """
+
+    def __init__(self, params: ChairParams | None = None,
+                 limits: ComfortLimits | None = None):
+        self.check = ClearanceCheck(params, limits)
+        self.params, self.limits = p, lim = self.check.params, self.check.limits
+        # the velocity controller's bytes for the limits: raw bytes beyond are brought back
+        self._limit_bytes = (
+            twist_to_pot_command(Twist(lim.max_speed, lim.max_turn_rate), p),
+            twist_to_pot_command(Twist(-lim.max_reverse_speed, -lim.max_turn_rate), p))
+        self.interventions: Counter[str] = Counter()
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the ramp (standing still), the joystick's release and the last reason."""
+        self.v = self.w = self.accel = 0.0
+        self.reason: str | None = None
+        self._released_at = -math.inf
+        self._overridden = False
+
+    def stopped(self) -> None:
+        """The chair was stopped outside the filter (``Base.stop``): the ramp starts
+        again from standing; the joystick's release is remembered."""
+        self.v = self.w = self.accel = 0.0
+
+    def apply(self, frame: SensorFrame, command: Twist | PotCommand,
+              decided_at: float | None = None) -> Twist | PotCommand:
         """The command to send for ``frame`` when ``command`` (decided at ``decided_at``
-        s, default now) is wanted."""
-        if not isinstance(command, Twist):
-            raise ValueError(f"the safety filter takes a Twist (m/s, rad/s), got "
-                             f"{type(command).__name__}")
-        lim, dt = self.limits, self.params.control_period
+        s, default now) is wanted: a Twist for a Twist, pot bytes for pot bytes."""
+        if not isinstance(command, (Twist, PotCommand)):
+            raise ValueError(f"the safety filter takes a Twist (m/s, rad/s) or a PotCommand "
+                             f"(bytes 0..255), got {type(command).__name__}")
         self.reason = None
         decided_at = frame.t if decided_at is None else decided_at
+        held = self._held(frame, decided_at)
+        if held is not None:
+            self._stop(*held)
+            return Twist(0.0, 0.0) if isinstance(command, Twist) else self._neutral()
+        if isinstance(command, PotCommand):
+            return self._apply_pots(frame, command)
+        return self._apply_twist(frame, command)
+
+    def _held(self, frame: SensorFrame, decided_at: float) -> tuple[str, str] | None:
+        """Rules 1 and 2: (kind, detail) of a stop the joystick or a stale command
+        calls for, or None."""
+        lim = self.limits
         if frame.flags & StatusFlags.JOYSTICK_OVERRIDE:
             self._overridden = True
-            return self._stop("joystick override")
+            return "joystick override", ""
         if self._overridden:
             self._overridden, self._released_at = False, frame.t
         if frame.t - self._released_at < lim.resume_delay:
-            return self._stop("joystick just released")
+            return "joystick just released", ""
         if frame.t - decided_at > lim.stale_after:
-            return self._stop("stale command", f"{frame.t - decided_at:.2f} s old")
+            return "stale command", f"{frame.t - decided_at:.2f} s old"
+        return None
 
+    def _apply_twist(self, frame: SensorFrame, command: Twist) -> Twist:
+        """Rules 3-5 for a Twist."""
+        lim, dt = self.limits, self.params.control_period
         v = min(max(command.v, -lim.max_reverse_speed), lim.max_speed)
         w = min(max(command.w, -lim.max_turn_rate), lim.max_turn_rate)
         if abs(v * w) > lim.max_lateral_accel:
@@ -200,14 +279,10 @@ class SafetyFilter:
             self._note("speed limit")
 
         moving = v if abs(v) > abs(self.v) else self.v  # the faster of wanted and present
-        if v != 0.0:
-            gap, seen_by = self.clearance(frame, forward=v > 0)
-            if gap <= self.braking_distance(moving):
-                self.v = self.accel = 0.0
-                self.w = self._ramp_turn(w, dt)
-                self._note("obstacle", f"{gap:.2f} m {'ahead' if v > 0 else 'behind'}, "
-                                       f"seen by {seen_by}")
-                return Twist(0.0, self.w)
+        if v != 0.0 and self._obstacle_stop(frame, v, moving):
+            self.v = self.accel = 0.0
+            self.w = self._ramp_turn(w, dt)
+            return Twist(0.0, self.w)
         if v == 0.0 and w == 0.0 and abs(self.v) > STOP_ON_ARC_ABOVE:
             # a stop keeps to the arc the chair is on: the turn rate slows with the
             # speed, in proportion, so the way it sweeps while braking is the way the
@@ -221,11 +296,42 @@ class SafetyFilter:
         self.w = self._ramp_turn(w, dt)
         return Twist(self.v, self.w)
 
+    def _apply_pots(self, frame: SensorFrame, command: PotCommand) -> PotCommand:
+        """Rule 3's speed cap and rule 4 for raw pot bytes (module notes); no ramps."""
+        p = self.params
+        fb, lr = command.fb, command.lr
+        steady = pot_command_to_twist(command, p)
+        v, w = steady.v, steady.w
+        fastest, slowest = self._limit_bytes
+        fb = min(max(fb, slowest.fb), fastest.fb)
+        lr = min(max(lr, fastest.lr), slowest.lr)  # LR below 128 turns left
+        if (fb, lr) != (command.fb, command.lr):
+            self._note("speed limit")
+            steady = pot_command_to_twist(PotCommand(fb, lr), p)
+            v, w = steady.v, steady.w
+        moving = v if abs(v) > abs(self.v) else self.v
+        if v != 0.0 and self._obstacle_stop(frame, v, moving):
+            fb, v = p.pot_neutral, 0.0
+        self.v, self.w, self.accel = v, w, 0.0
+        return PotCommand(fb, lr)
+
+    def _obstacle_stop(self, frame: SensorFrame, v: float, moving: float) -> bool:
+        """Rule 4: whether something is within braking distance (at ``moving`` m/s) in
+        the strip the chair sweeps going at ``v``; notes it if so."""
+        gap, seen_by = self.check.clearance(frame, forward=v > 0)
+        if gap > self.check.braking_distance(moving):
+            return False
+        self._note("obstacle", f"{gap:.2f} m {'ahead' if v > 0 else 'behind'}, "
+                               f"seen by {seen_by}")
+        return True
+
     # ------------------------------------------------------------------ helpers
-    def _stop(self, kind: str, detail: str = "") -> Twist:
+    def _stop(self, kind: str, detail: str = "") -> None:
         self.v = self.w = self.accel = 0.0
         self._note(kind, detail)
-        return Twist(0.0, 0.0)
+
+    def _neutral(self) -> PotCommand:
+        return PotCommand(self.params.pot_neutral, self.params.pot_neutral)
 
     def _note(self, kind: str, detail: str = "") -> None:
         """Count an intervention of ``kind`` and add it to :attr:`reason`."""

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 
-from abcwc.control.pots import clamp_pot_byte
+from abcwc.control.pots import clamp_pot_byte, pot_byte_to_deflection
 from abcwc.params import ChairParams, default_params
 from abcwc.types import PotCommand, Twist
 
@@ -66,6 +66,17 @@ def twist_to_pot_command(twist: Twist, params: ChairParams | None = None) -> Pot
     limits saturate at full deflection.
     """
     return PotCommand(*twist_to_pot_bytes_int(*twist_to_wire_units(twist), params))
+
+
+def pot_command_to_twist(pots: PotCommand, params: ChairParams | None = None) -> Twist:
+    """The steady speed (m/s) and turn rate (rad/s) the motor controller makes of pot
+    bytes: each byte's deflection (:func:`~abcwc.control.pots.pot_byte_to_deflection`)
+    times full speed and full turn rate, an LR byte below 128 turning left (positive).
+    The inverse of :func:`twist_to_pot_command` up to its rounding; a frame's ``pot_fb``
+    and ``pot_lr`` read this way give what the chair is being driven at now."""
+    p = params or default_params()
+    return Twist(pot_byte_to_deflection(pots.fb, p) * p.max_speed,
+                 -pot_byte_to_deflection(pots.lr, p) * p.max_turn_rate)
 
 
 def thesis_twist_to_pots(twist: Twist, params: ChairParams | None = None) -> PotCommand:

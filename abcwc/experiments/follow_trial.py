@@ -115,7 +115,7 @@ def run_follow_trial(seconds: float = 120.0, seed: int = 0, thesis: bool = False
     every = round(0.1 / chair.period)
     for k in range(round(seconds / chair.period)):
         command = follower(frame)
-        chair.send(command)
+        chair.send(command, follower.decided_at)
         frame = chair.step()
         circles = circles_of(chair.walkers)
         chair_outline = transform_points(chair.pose, outline)

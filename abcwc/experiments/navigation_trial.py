@@ -240,7 +240,7 @@ def drive_to_goal(chair: SimBase, navigator: Navigator, goal: Pose2D | str,
     track, estimates, people = [], [], []
     every = max(1, round(0.1 / chair.period))
     while navigator.running and chair.t - t0 < timeout:
-        chair.send(navigator(frame))  # type: ignore[arg-type]
+        chair.send(navigator(frame), navigator.decided_at)
         frame = chair.step()
         if round((chair.t - t0) / chair.period) % every == 0:
             truth, estimate = chair.pose, navigator.localizer.pose
@@ -263,7 +263,7 @@ def drive_to_goal(chair: SimBase, navigator: Navigator, goal: Pose2D | str,
     if navigator.running:
         navigator.cancel()
     for _ in range(25):  # let the chair come to rest before the next goal
-        chair.send(navigator(frame))  # type: ignore[arg-type]
+        chair.send(navigator(frame), navigator.decided_at)
         frame = chair.step()
     end = chair.pose
     return GoalOutcome(

@@ -158,7 +158,9 @@ class FirmwareInLoopBase(LinkedBody):
         **sim_options: Any,
     ):
         self.sim = SimBase(world, **sim_options)
+        self.sim.safety = None  # commands reach the sim as the firmware's pot bytes
         self.params = self.sim.params
+        self._init_safety()  # this body's filter, before the commands go on the wire
         self.timeout = float(timeout)
         self.ready_timeout = float(ready_timeout)
         self.period = P.TELEMETRY_PERIOD_MS / 1000.0

@@ -30,8 +30,9 @@ from __future__ import annotations
 
 import os
 
-from abcwc.base import BodyMixin, Controller
+from abcwc.base import BODY_FILTER, BodyMixin, Controller, _BodyFilter
 from abcwc.control.interface_board import check_speed_cap
+from abcwc.control.safety import SafetyFilter
 from abcwc.hw import protocol as P
 from abcwc.hw.link import (
     STALL_LIMIT,
@@ -112,28 +113,31 @@ class LinkedBody(BodyMixin):
         """The firmware's speed cap in force, pot bytes from 128."""
         return self.link.speed_cap
 
-    def send(self, command: PotCommand | Twist) -> None:
-        """Queue a command for the next ``step``; it holds on the chair until
-        replaced or until the 250 ms watchdog."""
+    def _write(self, command: PotCommand | Twist) -> None:
+        """Queue a command (after the safety filter) for the next ``step``; it holds on
+        the chair until replaced or until the 250 ms watchdog."""
         self.link.queue(command)
 
     def stop(self) -> None:
         """Pots to neutral now (STOP frame, written at once)."""
         self.link.stop()
+        self._stopped()
 
     def set_speed_cap(self, offset: int) -> None:
         """Limit host commands to 128 +- ``offset`` pot bytes (CONFIGURE, at once)."""
         self.link.set_speed_cap(offset)
 
-    def run(self, controller: Controller, seconds: float, progress: bool = False) -> RunLog:
-        """Call ``controller(frame)`` every period for ``seconds``; send what it returns.
+    def run(self, controller: Controller, seconds: float, progress: bool = False,
+            safety: SafetyFilter | None | _BodyFilter = BODY_FILTER) -> RunLog:
+        """Call ``controller(frame)`` every period for ``seconds``; send what it returns
+        through the safety filter (:meth:`abcwc.base.BodyMixin.run`).
 
         The controller returns a PotCommand, a Twist, or None (send nothing: after
         250 ms the chair's watchdog stops it). A link failure stops the chair (if it
         can still hear) and raises ChairLinkError.
         """
         try:
-            return super().run(controller, seconds, progress)
+            return super().run(controller, seconds, progress, safety)
         except BaseException:
             try:
                 self.stop()
@@ -195,6 +199,7 @@ class SerialBase(LinkedBody):
         self.link = SerialLink(port, baudrate, timeout)
         try:
             self.link.wait_ready(self.ready_timeout)
+            self._init_safety()
             self.set_speed_cap(cap)
             self._frame = self.link.frame_from(self.link.next_telemetry(first=True))
         except BaseException:

@@ -27,9 +27,9 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
 
 It ends **succeeded**, or **failed** with a reason a person can act on: the goal is
 off the map or in a wall, no path leads there, the chair is stuck, lost, or out of
-time, or the goal was cancelled. Every command it sends passes through the
-:class:`~abcwc.control.safety.SafetyFilter` inside :meth:`Navigator.__call__`: there is
-no way round it.
+time, or the goal was cancelled. Every command it sends passes through the body's
+:class:`~abcwc.control.safety.SafetyFilter` in the control loop (:mod:`abcwc.base`):
+there is no way round it; its DWA plans brakes the filter's ramp can follow.
 
 :class:`NavigatorSettings` holds A.17's values where they suit a chair with a person
 in it, and says why where they do not.
@@ -45,7 +45,7 @@ import numpy as np
 from scipy import ndimage
 
 from abcwc.behaviours.base import BehaviourBase
-from abcwc.control.safety import ComfortLimits, SafetyFilter, range_sensor_rays
+from abcwc.control.safety import ClearanceCheck, range_sensor_rays
 from abcwc.estimation.ekf import ChairEkf
 from abcwc.geometry import compose, position_of, wrap_angle
 from abcwc.mapping.grid import GridGeometry
@@ -174,7 +174,6 @@ class Feedback:
     pose: Pose2D  # the estimate the navigator drives by
     distance_remaining: float  # m along the current plan (inf before the first plan)
     recoveries: int  # since the chair last made progress
-    safety: str | None  # what the safety filter changed in the last command, if anything
 
 
 class Navigator(BehaviourBase):
@@ -187,7 +186,7 @@ class Navigator(BehaviourBase):
 
     def __init__(self, static_map: Costmap, localizer: MapLocalizer,
                  params: ChairParams | None = None, settings: NavigatorSettings | None = None,
-                 limits: ComfortLimits | None = None, places: dict[str, Pose2D] | None = None):
+                 places: dict[str, Pose2D] | None = None):
         self.settings = s = settings or NavigatorSettings()
         super().__init__(rate_hz=s.controller_frequency)
         self.params = p = params or default_params()
@@ -195,7 +194,7 @@ class Navigator(BehaviourBase):
         self.localizer = localizer
         self.places = dict(places or {})
         self.footprint = chair_footprint(p)
-        self.safety = SafetyFilter(p, limits)
+        self.clearance = ClearanceCheck(p)  # what the body's safety filter will stop for
         nav = load_navigation_params()
         local = replace(nav.local_planner, max_vel_x=s.max_vel_x, min_vel_x=0.0,
                         acc_lim_x=s.acc_lim_x, max_vel_theta=s.max_vel_theta,
@@ -203,7 +202,8 @@ class Navigator(BehaviourBase):
         self.dwa = DwaPlanner(self.footprint, replace(
             nav, move_base=replace(nav.move_base, controller_frequency=s.controller_frequency)),
             local, padding=s.footprint_padding,
-            braking_delay=self.safety.reaction_time + s.acc_lim_x / self.safety.limits.max_jerk)
+            braking_delay=(self.clearance.reaction_time
+                           + s.acc_lim_x / self.clearance.limits.max_jerk))
         self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
         self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
         self.range_layer = RangeSensorLayer(static_map)
@@ -223,8 +223,7 @@ class Navigator(BehaviourBase):
     @classmethod
     def for_world(cls, world: World, start: Pose2D | str | None = None,
                   params: ChairParams | None = None, ekf: ChairEkf | None = None,
-                  settings: NavigatorSettings | None = None,
-                  limits: ComfortLimits | None = None) -> Navigator:
+                  settings: NavigatorSettings | None = None) -> Navigator:
         """A navigator on a simulated world's walls (the map a survey would draw),
         starting at ``start`` (a pose or a place name; default the world's start), its
         localiser's filter ``ekf`` (default: nominal odometry from ``start``)."""
@@ -232,19 +231,18 @@ class Navigator(BehaviourBase):
         start_pose = _place(world.places, start if start is not None else "start")
         static = Costmap.from_walls(world.walls, settings.resolution)
         localizer = MapLocalizer(wall_points(world.walls), start_pose, params, ekf=ekf)
-        return cls(static, localizer, params, settings, limits, places=world.places)
+        return cls(static, localizer, params, settings, places=world.places)
 
     @classmethod
     def for_map(cls, cells: np.ndarray, grid: GridGeometry, start: Pose2D,
                 params: ChairParams | None = None, ekf: ChairEkf | None = None,
-                settings: NavigatorSettings | None = None,
-                limits: ComfortLimits | None = None) -> Navigator:
+                settings: NavigatorSettings | None = None) -> Navigator:
         """A navigator on a built map: trinary ``cells`` (a map file's, or
         ``OccupancyGrid.trinary()``) on ``grid``, starting at ``start``."""
         static = Costmap.like(grid)
         static.add_static(cells)
         localizer = MapLocalizer(occupied_points(cells, grid), start, params, ekf=ekf)
-        return cls(static, localizer, params, settings, limits)
+        return cls(static, localizer, params, settings)
 
     # ------------------------------------------------------------------ goals
     def go_to(self, goal: Pose2D | tuple[float, ...] | str) -> None:
@@ -287,19 +285,14 @@ class Navigator(BehaviourBase):
             self.people.update(scan, sensor, scan.stamp)
 
     def __call__(self, frame: SensorFrame) -> Twist:
-        wanted = super().__call__(frame)
-        if not isinstance(wanted, Twist):  # pragma: no cover (the navigator sends Twists)
-            raise TypeError("the navigator's commands are Twists")
-        command = self.safety.apply(frame, wanted, self._decided_at)
+        command = super().__call__(frame)
         pose = self.localizer.pose
         self.feedback = Feedback(frame.t, self._phase if self.running else self.status.value,
-                                 pose, self._distance_remaining(pose), self._recoveries,
-                                 self.safety.reason)
-        return command
+                                 pose, self._distance_remaining(pose), self._recoveries)
+        return command  # type: ignore[return-value]
 
     def update(self, frame: SensorFrame) -> Twist:
         """One decision (at ``controller_frequency``)."""
-        self._decided_at = frame.t
         if self.goal is None:
             self.fail("no goal: call go_to(goal) first")
             return Twist(0.0, 0.0)
@@ -403,7 +396,6 @@ class Navigator(BehaviourBase):
     def _clear_goal_state(self) -> None:
         self._lost_since: float | None = None
         self._next_search = -math.inf
-        self._decided_at: float | None = None
         self._started: float | None = None
         self._timeout = math.inf
         self._next_plan = -math.inf
@@ -584,9 +576,9 @@ class Navigator(BehaviourBase):
         self._recoveries += 1
         self._blocked_since = None
         self._anchor = (frame.t, pose)
-        behind, _ = self.safety.clearance(frame, forward=False)
+        behind, _ = self.clearance.clearance(frame, forward=False)
         back = compose(pose, (-s.back_off_distance, 0.0, 0.0))
-        if (behind > s.back_off_distance + self.safety.braking_distance(s.back_off_speed)
+        if (behind > s.back_off_distance + self.clearance.braking_distance(s.back_off_speed)
                 and self._footprint_free([back])):
             self._recovery = ("backing off", frame.t, pose)
         elif self._footprint_free([compose(pose, (0.0, 0.0, side * k * math.pi / 12))

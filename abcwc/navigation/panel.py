@@ -85,7 +85,7 @@ class NavigatorPanel:
         next_draw = start + self.refresh
         self._say(f"driving to ({nav.goal.x:.2f}, {nav.goal.y:.2f})")
         while nav.running and self.chair.t - start < self.max_seconds:
-            self.chair.send(nav(self.frame))
+            self.chair.send(nav(self.frame), nav.decided_at)
             self.frame = self.chair.step()
             if self.chair.t >= next_draw:
                 next_draw += self.refresh
@@ -93,7 +93,7 @@ class NavigatorPanel:
         if nav.running:
             nav.cancel()
         for _ in range(25):  # come to rest
-            self.chair.send(nav(self.frame))
+            self.chair.send(nav(self.frame), nav.decided_at)
             self.frame = self.chair.step()
         self.redraw()
         truth = self.chair.pose

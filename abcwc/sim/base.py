@@ -134,6 +134,7 @@ class SimBase(BodyMixin):
         self._ir_reading = np.full(6, np.inf)
         self._read_slow_sensors(force=True)
         self._frame = self._make_frame(gyro_z=self.gyro.read(0.0))
+        self._init_safety()
 
     # ----------------------------------------------------------------- set-up
     def _start_pose(self, start: Pose2D | str | None) -> Pose2D:
@@ -205,13 +206,14 @@ class SimBase(BodyMixin):
         return self.board.last_command
 
     # ----------------------------------------------------------------- commands
-    def send(self, command: PotCommand | Twist) -> None:
-        """Send a command; it holds until replaced or until the 250 ms watchdog."""
+    def _write(self, command: PotCommand | Twist) -> None:
+        """The interface board takes the command (after the safety filter)."""
         self.board.command(command, self.t)
 
     def stop(self) -> None:
         """Command both pots to neutral now."""
         self.board.stop(self.t)
+        self._stopped()
 
     def set_joystick(self, fb: int | None = None, lr: int | None = None) -> None:
         """Set the virtual joystick's ADC readings (pot scale; 254 is centred).

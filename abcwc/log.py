@@ -266,7 +266,8 @@ class LogRecorder:
         """Record one period: the frame after it, the command sent, its pot bytes, the
         command the controller wanted (default: the one sent) and what the safety
         filter changed (None: nothing)."""
-        pose = frame.pose
+        truth = frame.truth
+        pose = truth.pose if truth is not None else None
         twist = command if isinstance(command, Twist) else None
         wanted = command if wanted is None else wanted
         wanted_twist = wanted if isinstance(wanted, Twist) else None
@@ -282,7 +283,7 @@ class LogRecorder:
             twist.v if twist else np.nan, twist.w if twist else np.nan,
             int(frame.flags), frame.bad_frames,
             pose.x if pose else np.nan, pose.y if pose else np.nan,
-            pose.theta if pose else np.nan, frame.collisions, *ir,
+            pose.theta if pose else np.nan, truth.collisions if truth is not None else 0, *ir,
         ))
         row = len(self._rows) - 1
         for frame_id, reading in frame.readings.items():

@@ -137,6 +137,22 @@ CAMERA_FRAME = "camera_link"
 _UNSET = object()  # "not given" for SensorFrame's keyword arguments (None means "no scan")
 
 
+@dataclass(frozen=True)
+class SimTruth:
+    """What only a simulator knows about a frame: the chair's true ``pose`` (base_link in
+    the map frame, m and rad) and the ``collisions`` (pymunk contacts with a wall, an
+    object or a person) so far.
+
+    A real chair's frames have none (``frame.truth is None``). Only the judges read it
+    (the exercise checks, the seeded studies and their plots) and the
+    :class:`~abcwc.behaviours.GroundTruth` "estimator" that teaching runs steer by on
+    purpose; no behaviour or estimator does (a test holds them to it).
+    """
+
+    pose: Pose2D
+    collisions: int = 0
+
+
 def ir_frame(k: int) -> str:
     """Frame id of IR ranger ``k`` (0-based): ``ir_<k>_link``."""
     return f"ir_{k}_link"
@@ -146,8 +162,10 @@ def ir_frame(k: int) -> str:
 class SensorFrame:
     """Everything the chair reports in one control period.
 
-    The first block is what the real chair's firmware sends; the simulator fills the
-    ``sim extras`` too (ground truth and the heavier sensors).
+    The first block is what the real chair's firmware sends. ``truth`` is the
+    simulator's ground truth (:class:`SimTruth`: the true pose and the collisions), None
+    on a real chair: it is marked apart so that nothing that drives the chair reads it
+    by mistake. The simulator fills the heavier sensors' ``readings`` too.
 
     ``readings`` holds every range sensor's newest reading keyed by its ROS frame id
     (as a ``header.frame_id``): :data:`SONAR_FRAME` and the six :data:`IR_FRAMES` map to
@@ -168,9 +186,7 @@ class SensorFrame:
     pot_lr: int
     flags: StatusFlags = StatusFlags.NONE
     bad_frames: int = 0
-    # sim extras
-    pose: Pose2D | None = None  # ground truth (map frame)
-    collisions: int = 0  # collisions so far
+    truth: SimTruth | None = None  # the simulator's ground truth; None on a real chair
     extras: dict = field(default_factory=dict)
     readings: dict[str, object] = field(default_factory=dict)  # frame id -> range / scan
 
@@ -189,18 +205,18 @@ class SensorFrame:
         ir: object = _UNSET,
         flags: StatusFlags = StatusFlags.NONE,
         bad_frames: int = 0,
-        pose: Pose2D | None = None,
+        truth: SimTruth | None = None,
         lidar: object = _UNSET,
         depth_scan: object = _UNSET,
-        collisions: int = 0,
         extras: dict | None = None,
         readings: dict[str, object] | None = None,
     ):
         self.t, self.ticks_left, self.ticks_right, self.gyro_z = t, ticks_left, ticks_right, gyro_z
         self.joystick_fb, self.joystick_lr = joystick_fb, joystick_lr
         self.pot_fb, self.pot_lr = pot_fb, pot_lr
-        self.flags, self.bad_frames, self.pose = flags, bad_frames, pose
-        self.collisions = collisions
+        if truth is not None and not isinstance(truth, SimTruth):
+            raise ValueError(f"truth must be a SimTruth or None, got {truth!r}")
+        self.flags, self.bad_frames, self.truth = flags, bad_frames, truth
         self.extras = {} if extras is None else extras
         self.readings = dict(readings or {})  # a copy: replace() must not edit the original
         for name, value in (("sonar", sonar), ("ir", ir), ("lidar", lidar),
@@ -268,7 +284,8 @@ def make_frame(t: float = 0.0, params: ChairParams | None = None, **fields: obje
     Defaults (from ``params``, the Sterling Ruby's by default): no encoder counts, no
     turn, the sonar at its maximum range (nothing ahead), every IR ranger ``inf``,
     joystick centred, pots neutral, no ground truth. ``fields`` override any of them
-    by SensorFrame's keyword names (``sonar=1.2``, ``pose=Pose2D(...)``, ``lidar=scan``).
+    by SensorFrame's keyword names (``sonar=1.2``, ``truth=SimTruth(Pose2D(...))``,
+    ``lidar=scan``).
     """
     p = params if params is not None else default_params()
     values: dict[str, object] = dict(

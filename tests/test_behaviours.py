@@ -18,7 +18,7 @@ from abcwc.behaviours import (
 from abcwc.estimation import Odometry
 from abcwc.navigation import SonarAvoider
 from abcwc.sim.base import SimBase
-from abcwc.types import NEUTRAL, Pose2D, Twist, make_frame
+from abcwc.types import NEUTRAL, Pose2D, SimTruth, Twist, make_frame
 
 PERIOD = 1.0 / LOOP_RATE_HZ
 
@@ -65,18 +65,18 @@ def test_status_cancel_and_reset():
     goal = GoToLandmark((3.0, 0.0), GroundTruth(), tolerance=0.1)
     assert isinstance(goal, Behaviour) and goal.status is Status.RUNNING
     assert goal.failure is None
-    driving = goal(make_frame(0.0, pose=Pose2D()))
+    driving = goal(make_frame(0.0, truth=SimTruth(Pose2D())))
     assert driving.v > 0
     goal.cancel()
     assert goal.status is Status.FAILED and goal.failure == "cancelled"
-    assert goal(make_frame(0.02, pose=Pose2D())) == Twist(0.0, 0.0)
+    assert goal(make_frame(0.02, truth=SimTruth(Pose2D()))) == Twist(0.0, 0.0)
     goal.reset()
     assert goal.status is Status.RUNNING and goal.failure is None
-    assert goal(make_frame(0.04, pose=Pose2D())) == driving
+    assert goal(make_frame(0.04, truth=SimTruth(Pose2D()))) == driving
     # within the tolerance: succeeded, and stays so when the chair drifts away again
-    assert goal(make_frame(0.06, pose=Pose2D(2.95, 0.0, 0.0))) == Twist(0.0, 0.0)
+    assert goal(make_frame(0.06, truth=SimTruth(Pose2D(2.95, 0.0, 0.0)))) == Twist(0.0, 0.0)
     assert goal.status is Status.SUCCEEDED
-    assert goal(make_frame(0.08, pose=Pose2D(1.0, 0.0, 0.0))) == Twist(0.0, 0.0)
+    assert goal(make_frame(0.08, truth=SimTruth(Pose2D(1.0, 0.0, 0.0)))) == Twist(0.0, 0.0)
     assert goal.status is Status.SUCCEEDED
     goal.cancel()  # cancelling a finished behaviour changes nothing
     assert goal.status is Status.SUCCEEDED
@@ -109,15 +109,15 @@ def test_a_cancelled_sonar_avoider_sends_neutral_pots():
 
 def test_waypoints_succeed_after_the_last_and_reset_restarts_the_route():
     route = FollowWaypoints([(1.0, 0.0), (1.0, 1.0)], tolerance=0.2)
-    route(make_frame(0.0, pose=Pose2D()))
+    route(make_frame(0.0, truth=SimTruth(Pose2D())))
     assert route.index == 0
-    route(make_frame(0.02, pose=Pose2D(0.9, 0.0, 0.0)))
+    route(make_frame(0.02, truth=SimTruth(Pose2D(0.9, 0.0, 0.0))))
     assert route.index == 1 and route.status is Status.RUNNING
-    assert route(make_frame(0.04, pose=Pose2D(1.0, 0.9, 0.0))) == Twist(0.0, 0.0)
+    assert route(make_frame(0.04, truth=SimTruth(Pose2D(1.0, 0.9, 0.0)))) == Twist(0.0, 0.0)
     assert route.status is Status.SUCCEEDED
     route.reset()
     assert route.index == 0 and route.status is Status.RUNNING
-    assert route(make_frame(0.06, pose=Pose2D(-1.0, 0.0, 0.0))).v > 0
+    assert route(make_frame(0.06, truth=SimTruth(Pose2D(-1.0, 0.0, 0.0)))).v > 0
 
 
 def test_a_goal_behaviour_at_5_hz_still_reaches_its_goal():

@@ -223,7 +223,7 @@ def test_wander_standing_still_is_not_yet(capsys):
 
 
 def test_wander_hides_the_ground_truth(capsys):
-    result = ch03.wander_check(lambda frame: Twist(0.5 if frame.pose.x < 5 else 0.0, 0.0))
+    result = ch03.wander_check(lambda frame: Twist(0.5 if frame.truth.pose.x < 5 else 0.0, 0.0))
     assert_not_yet(result, capsys, "AttributeError")
 
 

@@ -79,7 +79,7 @@ def test_the_chair_closes_to_a_metre_from_a_standing_person_and_stops():
         1.0, abs=0.1)
     assert follower.state == "following"
     assert follower.sightings[-1].t > 11.5  # reading the tag to the end
-    assert abs(chair.read().pose.theta) < 0.05
+    assert abs(chair.read().truth.pose.theta) < 0.05
     assert np.abs(np.array([row[4] for row in follower.log[-30:]])).max() < 0.05  # still
 
 

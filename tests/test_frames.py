@@ -18,6 +18,7 @@ from abcwc.types import (
     SONAR_FRAME,
     LaserScan,
     Pose2D,
+    SimTruth,
     make_frame,
 )
 
@@ -48,9 +49,10 @@ def test_a_frame_without_scanners_has_no_scan_readings():
 
 def test_replace_changes_readings_of_the_copy_only():
     scan = _scan()
-    frame = make_frame(t=1.0, sonar=2.0, lidar=scan, pose=Pose2D(1.0, 2.0, 0.5))
-    blind = dataclasses.replace(frame, pose=None)
-    assert blind.pose is None and blind.lidar is scan and blind.sonar == 2.0
+    frame = make_frame(t=1.0, sonar=2.0, lidar=scan, truth=SimTruth(Pose2D(1.0, 2.0, 0.5)))
+    blind = dataclasses.replace(frame, truth=None)
+    assert blind.truth is None and frame.truth.pose == Pose2D(1.0, 2.0, 0.5)
+    assert blind.lidar is scan and blind.sonar == 2.0
     edited = dataclasses.replace(frame, sonar=0.6, ir=np.full(6, 0.4), lidar=None)
     assert edited.sonar == 0.6 and edited.lidar is None and LIDAR_FRAME not in edited.readings
     np.testing.assert_array_equal(edited.ir, np.full(6, 0.4))
@@ -68,14 +70,16 @@ def test_make_frame_is_a_chair_at_rest_in_open_space():
     p = default_params()
     frame = make_frame()
     assert frame.t == 0.0 and (frame.ticks_left, frame.ticks_right) == (0, 0)
-    assert frame.gyro_z == 0.0 and frame.pose is None and frame.collisions == 0
+    assert frame.gyro_z == 0.0 and frame.truth is None
     assert frame.sonar == p.sonar.max_range == 5.0  # the MB1013's "nothing ahead"
     assert frame.ir.shape == (6,) and np.isposinf(frame.ir).all()
     assert (frame.joystick_fb, frame.joystick_lr) == (254, 254)
     assert (frame.pot_fb, frame.pot_lr) == (128, 128)
-    moved = make_frame(t=2.5, ticks_left=10, gyro_z=0.1, pose=Pose2D(1.0, 0.0, 0.0))
+    moved = make_frame(t=2.5, ticks_left=10, gyro_z=0.1, truth=SimTruth(Pose2D(1.0, 0.0, 0.0)))
     assert (moved.t, moved.ticks_left, moved.ticks_right, moved.gyro_z) == (2.5, 10, 0, 0.1)
-    assert moved.pose == Pose2D(1.0, 0.0, 0.0)
+    assert moved.truth == SimTruth(Pose2D(1.0, 0.0, 0.0), collisions=0)
+    with pytest.raises(ValueError, match="SimTruth or None"):
+        make_frame(truth=Pose2D(1.0, 0.0, 0.0))
 
 
 def test_a_frame_without_a_sonar_reading_reads_nan():

@@ -16,7 +16,6 @@ from abcwc.behaviours import FollowWaypoints, GroundTruth, Status, floor_mixed_d
 from abcwc.estimation import (
     ChairEkf,
     EkfNoise,
-    absolute_fixes,
     estimate_gyro_bias,
     gyro_bias_prior,
     gyro_odometry_from_log,
@@ -33,6 +32,7 @@ from abcwc.experiments.nees import (
     ekf_run,
     filter_drive,
 )
+from abcwc.experiments.truth_fixes import absolute_fixes
 from abcwc.sim.base import SimBase
 from abcwc.sim.world import box_world
 from abcwc.types import Pose2D, Twist, make_frame
@@ -211,7 +211,7 @@ def test_waypoint_route_refuses_bad_input():
         FollowWaypoints([(1.0, math.nan)])
     with pytest.raises(ValueError, match="laps"):
         floor_mixed_drive(0)
-    frame = make_frame(pose=None)
+    frame = make_frame()
     with pytest.raises(ValueError, match="ground-truth"):
         GroundTruth().update_frame(frame)
 

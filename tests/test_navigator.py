@@ -39,7 +39,7 @@ def test_reaches_the_cafeteria_by_its_own_estimate():
     worst, frame = _drive(chair, navigator, 120)
     goal, truth = chair.world.places["cafeteria"], chair.pose
     assert navigator.status is Status.SUCCEEDED, navigator.failure
-    assert frame.collisions == 0
+    assert frame.truth.collisions == 0
     tolerance = navigator.settings.xy_goal_tolerance
     assert math.hypot(goal.x - truth.x, goal.y - truth.y) <= tolerance
     assert abs(wrap_angle(goal.theta - truth.theta)) <= navigator.settings.yaw_goal_tolerance + 0.05
@@ -112,7 +112,7 @@ def test_the_safety_filter_cannot_be_bypassed(monkeypatch):
     for _ in range(round(60 / chair.period)):
         chair.send(navigator(frame))
         frame = chair.step()
-    assert frame.collisions == 0
+    assert frame.truth.collisions == 0
     assert chair.pose.x > chair_start.x + 20  # it did drive, and stopped at the end wall
     assert chair.safety.interventions["obstacle"] > 0  # the body's filter, in the loop
 
@@ -149,7 +149,7 @@ def test_a_person_stepping_in_front_is_never_touched():
     navigator = Navigator.for_world(chair.world)
     navigator.go_to("end")
     _, frame = _drive(chair, navigator, 90)
-    assert frame.collisions == 0
+    assert frame.truth.collisions == 0
     assert navigator.status is Status.SUCCEEDED, navigator.failure
 
 
@@ -160,7 +160,7 @@ def test_a_person_walking_head_on_down_a_corridor_is_never_touched():
     navigator = Navigator.for_world(chair.world)
     navigator.go_to("end")
     _, frame = _drive(chair, navigator, 90)
-    assert frame.collisions == 0
+    assert frame.truth.collisions == 0
     assert navigator.status is Status.SUCCEEDED, navigator.failure
 
 
@@ -183,7 +183,7 @@ def test_a_walker_turning_back_towards_a_following_chair_is_never_touched():
         closest = min(closest, chair._chair_shape.point_query((x, y)).distance - r)
         if not navigator.running:
             break
-    assert frame.collisions == 0
+    assert frame.truth.collisions == 0
     assert closest > 0.1
     assert navigator.status is Status.SUCCEEDED, navigator.failure
 
@@ -255,7 +255,7 @@ def test_a_chair_moved_by_hand_finds_its_place_and_carries_on():
             break
     assert "relocalising" in phases
     assert navigator.status is Status.SUCCEEDED, navigator.failure
-    assert frame.collisions == 0
+    assert frame.truth.collisions == 0
     truth, estimate = chair.pose, navigator.localizer.pose
     assert math.hypot(truth.x - estimate.x, truth.y - estimate.y) < 0.1
 
@@ -279,7 +279,7 @@ def test_drives_by_a_map_file_the_mapping_made(tmp_path):
     navigator.go_to((8.0, 6.5, 0.0))
     _, frame = _drive(chair, navigator, 60)
     assert navigator.status is Status.SUCCEEDED, navigator.failure
-    assert frame.collisions == 0
+    assert frame.truth.collisions == 0
     assert math.hypot(chair.pose.x - 8.0, chair.pose.y - 6.5) <= 0.3
 
 

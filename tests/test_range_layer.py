@@ -127,11 +127,11 @@ def test_the_simulators_sonar_and_ir_mark_the_wall_where_it_is():
     layer = RangeSensorLayer(Costmap(0.05, 160, 120))
     rays = range_sensor_rays(params)
     frame = chair.step()
-    while frame.pose.x < 6.6:  # the sonar 1 m from the wall
+    while frame.truth.pose.x < 6.6:  # the sonar 1 m from the wall
         chair.send(Twist(0.4, 0.0))
         frame = chair.step()
         if round(frame.t / params.control_period) % 5 == 0:  # at the sonar's 10 Hz
-            layer.add_frame(frame, frame.pose, rays)
+            layer.add_frame(frame, frame.truth.pose, rays)
     costmap = Costmap.like(layer)
     layer.update_costs(costmap)
     rows, cols = np.nonzero(costmap.cost == LETHAL)

@@ -161,7 +161,7 @@ def test_sonar_avoider_on_a_real_chairs_frames():
     from abcwc.navigation import SonarAvoider
 
     sim = SimBase("lab", seed=0)
-    frame = replace(sim.frame, ir=np.full(6, np.nan), sonar=math.nan, pose=None)
+    frame = replace(sim.frame, ir=np.full(6, np.nan), sonar=math.nan, truth=None)
     avoider = SonarAvoider(cruise=0.3)
     assert avoider(frame) == twist_to_pot_command(Twist(0.3, 0.0))
     turn = avoider(replace(frame, sonar=0.6))

@@ -196,7 +196,7 @@ def test_person_stepping_in_front_of_a_blind_controller_is_not_touched():
     for _ in range(round(15 / DT)):
         chair.send(Twist(0.8, 0.0))  # a hand-written loop: send passes the filter too
         frame = chair.step()
-    assert frame.collisions == 0
+    assert frame.truth.collisions == 0
     assert chair.safety.interventions["obstacle"] > 0
     assert chair.pose.x > 8.0  # and went on once the way was clear
 

@@ -164,7 +164,7 @@ def test_a_walker_stops_for_a_chair_in_its_way_and_then_turns_back():
         frame = chair.step()
         gaps.append(chair._chair_shape.point_query(walker.body.position).distance - 0.25)
         xs.append(walker.circle[0])
-    assert frame.collisions == 0
+    assert frame.truth.collisions == 0
     assert LOOK_AHEAD - 0.05 < min(gaps) <= LOOK_AHEAD  # within a step of the look-ahead
     stood = np.sum(np.diff(xs) == 0.0) * chair.period
     assert stood == pytest.approx(WAIT_PATIENCE + TURN_TIME, abs=2 * chair.period)
@@ -183,11 +183,11 @@ def test_a_walker_bumped_from_the_side_stops_instead_of_shoving_the_chair():
     poses, walker_x, collisions = [], [], []
     for _ in range(round(12.0 / chair.period)):
         frame = chair.frame
-        chair.send(Twist(0.0 if frame.collisions or frame.t < 5.0 else 0.6, 0.0))
+        chair.send(Twist(0.0 if frame.truth.collisions or frame.t < 5.0 else 0.6, 0.0))
         frame = chair.step()
         poses.append(chair.pose)
         walker_x.append(walker.circle[0])
-        collisions.append(frame.collisions)
+        collisions.append(frame.truth.collisions)
     touched = int(np.argmax(np.array(collisions) > 0))
     assert touched > 0 and collisions[-1] == 1
     assert math.hypot(poses[-1].x - poses[touched].x, poses[-1].y - poses[touched].y) < 0.05
@@ -211,7 +211,7 @@ def test_a_walker_keeps_a_passing_clearance_from_the_chair(offset, passes):
     walker = chair.walkers[0]
     for _ in range(round(8.0 / chair.period)):
         frame = chair.step()
-        assert frame.collisions == 0
+        assert frame.truth.collisions == 0
         if walker.circle[1] > 11.0:
             break
     assert (walker.circle[1] > 11.0) == passes

@@ -170,10 +170,10 @@ def test_run_square_without_ground_truth_gives_nan():
             self.sim, self.period, self.params = sim, sim.period, sim.params
 
         def read(self):
-            return dataclasses.replace(self.sim.read(), pose=None)
+            return dataclasses.replace(self.sim.read(), truth=None)
 
         def run(self, controller, seconds):
-            log = self.sim.run(lambda f: controller(dataclasses.replace(f, pose=None)), seconds)
+            log = self.sim.run(lambda f: controller(dataclasses.replace(f, truth=None)), seconds)
             log.pose[:] = np.nan
             return log
 

@@ -24,7 +24,7 @@ from abcwc.log import RunLog  # noqa: E402
 from abcwc.params import default_params  # noqa: E402
 from abcwc.sim import SimBase, load_world  # noqa: E402
 from abcwc.teleop import TeleopPanel, key_to_pot_command  # noqa: E402
-from abcwc.types import LaserScan, Pose2D, PotCommand, Twist, make_frame  # noqa: E402
+from abcwc.types import LaserScan, Pose2D, PotCommand, SimTruth, Twist, make_frame  # noqa: E402
 
 
 @pytest.fixture(autouse=True)
@@ -138,7 +138,7 @@ def test_plot_sensors_draws_sonar_ir_and_scans():
     ir = np.array([0.5, np.inf, 1.0, -np.inf, 1.2, np.inf])
     scan = LaserScan(-math.pi, 2 * math.pi / 8, 0.15, 12.0,
                      np.array([1.0, 2.0, np.inf, 1.5, 1.0, -np.inf, 3.0, 2.0]))
-    frame = make_frame(sonar=1.25, ir=ir, pose=Pose2D(1.0, 1.0, 0.3), lidar=scan)
+    frame = make_frame(sonar=1.25, ir=ir, truth=SimTruth(Pose2D(1.0, 1.0, 0.3)), lidar=scan)
     ax = viz.plot_sensors(frame, params=p)
     wedges = [a for a in ax.patches if isinstance(a, Wedge)]
     assert len(wedges) == 1 and wedges[0].r == pytest.approx(1.25)

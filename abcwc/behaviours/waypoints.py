@@ -30,11 +30,11 @@ class GroundTruth:
     """A "pose estimator" that reads the simulator's true pose from each frame."""
 
     def update_frame(self, frame: SensorFrame) -> Pose2D:
-        """``frame.pose``; a real chair has none, so this refuses its frames."""
-        if frame.pose is None:
+        """``frame.truth.pose``; a real chair has none, so this refuses its frames."""
+        if frame.truth is None:
             raise ValueError("this frame has no ground-truth pose (a real chair's frames "
                              "never do); steer with an estimator such as Odometry instead")
-        return frame.pose
+        return frame.truth.pose
 
 
 class FollowWaypoints(BehaviourBase):

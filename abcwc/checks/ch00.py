@@ -27,7 +27,7 @@ import numpy as np
 
 from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
 from abcwc.params import ChairParams, default_params
-from abcwc.types import Pose2D, SensorFrame, make_frame
+from abcwc.types import Pose2D, SensorFrame, SimTruth, make_frame
 
 __all__ = [
     "counts_measurement_check",
@@ -122,7 +122,7 @@ def encoder_counts_to_distance(fn: Callable[..., object]) -> str:
 
 def _frame(sonar: float, pose: Pose2D | None = None) -> SensorFrame:
     """A SensorFrame with a given sonar reading and everything else at rest."""
-    return make_frame(sonar=sonar, pose=pose)
+    return make_frame(sonar=sonar, truth=SimTruth(pose))
 
 
 @checker("distance ahead")
@@ -142,7 +142,7 @@ def distance_ahead(fn: Callable[[SensorFrame, ChairParams], float]) -> str:
 
     chair = SimBase(world="lab", seed=3, start=Pose2D(7.0, 6.5, 0.0), people=False)
     frame = chair.read()
-    truth = 10.0 - frame.pose.x  # the lab's east wall is the line x = 10 m
+    truth = 10.0 - frame.truth.pose.x  # the lab's east wall is the line x = 10 m
     expect_close(fn(frame, chair.params), truth, what="simulated frame facing the east wall",
                  atol=0.03, unit="m", ref="ground truth 10 - x")
     return "4 made-up frames and a simulated one match (within 3 cm of the truth)"

@@ -110,9 +110,9 @@ def _make_controller(make: object) -> Callable[[SensorFrame], object]:
 
 def _without_ground_truth(controller: Callable[[SensorFrame], object]
                           ) -> Callable[[SensorFrame], object]:
-    """``controller`` fed frames without the simulator's ground-truth pose."""
+    """``controller`` fed frames without the simulator's ground truth (``truth=None``)."""
     def blind(frame: SensorFrame) -> object:
-        return controller(dataclasses.replace(frame, pose=None))
+        return controller(dataclasses.replace(frame, truth=None))
 
     return blind
 

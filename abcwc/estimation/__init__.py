@@ -10,7 +10,6 @@ from abcwc.estimation.ekf import (
     EkfNoise,
     FastEkf,
     FilterpyEkf,
-    absolute_fixes,
     gyro_bias_prior,
     kalman_update,
     nees,
@@ -54,7 +53,7 @@ from abcwc.geometry import wrap_tick_delta
 
 __all__ = [
     "ChairEkf", "EkfNoise", "FastEkf", "FilterpyEkf", "GyroOdometry", "Odometry",
-    "UmbmarkResult", "absolute_fixes", "alpha_beta",
+    "UmbmarkResult", "alpha_beta",
     "centres_of_gravity", "curve_radius",
     "e_max_syst", "encoder_ticks_to_wheel_distance", "estimate_gyro_bias",
     "gyro_bias_prior", "kalman_update",

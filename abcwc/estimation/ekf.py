@@ -431,21 +431,6 @@ class ChairEkf:
                            angle=1)
 
 
-def absolute_fixes(log: RunLog, every: float, std: tuple[float, float, float],
-                   seed: int = 0) -> dict[int, Pose2D]:
-    """Noisy fixes from the log's ground truth every ``every`` seconds: {row: pose}.
-
-    ``std`` (m, m, rad) is the fixes' noise, three finite numbers ``>= 0``.
-    """
-    if not (isinstance(every, (int, float)) and math.isfinite(every) and every > 0):
-        raise ValueError(f"every must be a finite interval > 0 s, got {every!r}")
-    stds = _standard_deviations("std (m, m, rad)", std, 3)
-    rng = np.random.default_rng(seed)
-    rows = np.flatnonzero(np.diff(np.floor((log.t - log.t[0]) / every), prepend=0) > 0)
-    noise = rng.standard_normal((len(rows), 3)) * stds
-    return {int(k): Pose2D(*(log.pose[k] + e)) for k, e in zip(rows, noise)}
-
-
 class Sighting(Protocol):
     """A landmark read by a sensor: which one, its range (m) and bearing (rad), and the
     2 x 2 covariance of the two (:class:`abcwc.perception.markers.MarkerSighting`)."""

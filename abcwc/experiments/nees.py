@@ -34,7 +34,6 @@ import numpy as np
 from abcwc.behaviours import FollowWaypoints, floor_mixed_drive
 from abcwc.estimation.ekf import (
     ChairEkf,
-    absolute_fixes,
     gyro_bias_prior,
     nees,
     nees_band,
@@ -43,6 +42,7 @@ from abcwc.estimation.ekf import (
 )
 from abcwc.estimation.odometry import odometry_from_log
 from abcwc.estimation.umbmark import THESIS_SIDE, e_max_syst, umbmark_corrections
+from abcwc.experiments.truth_fixes import absolute_fixes
 from abcwc.experiments.umbmark_trials import calibrate_distance_scale, run_umbmark
 from abcwc.log import RunLog
 from abcwc.perception.markers import MarkerSighting, sight_markers

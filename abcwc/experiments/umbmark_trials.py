@@ -82,7 +82,7 @@ def run_square(base: Base, direction: str, side: float = THESIS_SIDE,
     logs.append(base.run(driver, 1.0))  # succeeded: it sends zero; let the wheels stop
     odometry.update_frame(base.read())
     poses = np.vstack([log.pose for log in logs])
-    start = first.pose
+    start = first.truth.pose if first.truth is not None else None
     if start is None or not np.isfinite(poses).all():
         path = np.full_like(poses, np.nan)
     else:

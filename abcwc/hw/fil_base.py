@@ -306,8 +306,8 @@ class FirmwareInLoopBase(LinkedBody):
         s = sim.frame
         extras = dict(frame.extras, sim_ticks=(s.ticks_left, s.ticks_right),
                       sim_gyro_z=s.gyro_z, sim_sonar=s.sonar, avr_time_us=self.sim_us)
-        return replace(frame, pose=sim.pose, ir=s.ir, lidar=s.lidar, depth_scan=s.depth_scan,
-                       collisions=sim.collisions, extras=extras)
+        return replace(frame, truth=s.truth, ir=s.ir, lidar=s.lidar, depth_scan=s.depth_scan,
+                       extras=extras)
 
     # ----------------------------------------------------------------- state
     @property

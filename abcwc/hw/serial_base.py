@@ -173,7 +173,7 @@ class SerialBase(LinkedBody):
         params: the chair's parameters (default: ``data/chair.toml``'s, the
             thesis chair's), for code that turns counts into metres and the like.
 
-    Frames have ``pose=None`` (no ground truth), IR ranges NaN (not wired to the
+    Frames have ``truth=None`` (no ground truth), IR ranges NaN (not wired to the
     firmware) and ``sonar`` NaN while the sonar gives no echo. ``t`` is chair time
     since the first frame; ticks are the firmware's counts, unwrapped.
     ``frame.extras`` holds the raw telemetry fields (``time_ms``, ``seq``,

@@ -45,6 +45,7 @@ from abcwc.types import (
     Pose2D,
     PotCommand,
     SensorFrame,
+    SimTruth,
     StatusFlags,
     Twist,
 )
@@ -344,8 +345,8 @@ class SimBase(BodyMixin):
             sonar=self._sonar_reading, ir=self._ir_reading,
             joystick_fb=self.joystick[0], joystick_lr=self.joystick[1],
             pot_fb=self._pots.fb, pot_lr=self._pots.lr, flags=self._flags,
-            pose=self.pose, lidar=self._last_scan["lidar"],
-            depth_scan=self._last_scan["depth_scan"], collisions=self.collisions,
+            truth=SimTruth(self.pose, self.collisions), lidar=self._last_scan["lidar"],
+            depth_scan=self._last_scan["depth_scan"],
             readings={CAMERA_FRAME: self._image} if self._image is not None else None,
         )
 

@@ -92,7 +92,7 @@ def plot_sensors(frame_or_chair: object, ax: Axes | None = None,
     """
     frame = _frame_of(frame_or_chair)
     p = params or getattr(frame_or_chair, "params", None) or default_params()
-    pose = pose if pose is not None else frame.pose
+    pose = pose if pose is not None else (frame.truth.pose if frame.truth else None)
     if pose is None:
         raise ValueError("the frame has no ground-truth pose (a real chair); pass pose=")
     ax = new_axes(ax)

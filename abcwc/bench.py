@@ -10,7 +10,6 @@ import json
 import statistics
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 from abcwc.types import Twist
 
@@ -305,28 +304,21 @@ def bench_follow() -> dict[str, float]:
     return {"real-time factor": 60.0 / (time.perf_counter() - start)}
 
 
-@benchmark("slam", "graph SLAM on the shared benchmark logs: seconds, scans per second, "
-           "speed-up over the recording, relation errors (deterministic: run once)",
+@benchmark("slam", "graph SLAM on the benchmark logs in data/slam: seconds, scans per "
+           "second, speed-up over the recording, relation errors (deterministic: run once)",
            repeat=False)
 def bench_slam() -> dict[str, float]:
-    import sys
-
     from abcwc.mapping.carmen import read_carmen_log
     from abcwc.mapping.relations import read_relations, relation_errors
     from abcwc.mapping.slam import run_slam
-    from abcwc.mapping.slam_data import LOG_FACTS, SLAM_DATA_ENV, slam_data_dir
+    from abcwc.mapping.slam_data import LOG_FACTS, slam_file
 
-    folder = slam_data_dir()
     figures: dict[str, float] = {}
     for name, facts in LOG_FACTS.items():
-        if not (folder / f"{name}.clf.gz").is_file():
-            print(f"slam: {name} skipped, not in {folder} (set {SLAM_DATA_ENV})",
-                  file=sys.stderr)
-            continue
-        log = read_carmen_log(folder / f"{name}.clf.gz", **facts)
+        log = read_carmen_log(slam_file(f"{name}.clf.gz"), **facts)
         result = run_slam(log)
         errors = relation_errors(result.laser_poses,
-                                 read_relations(folder / f"{name}.relations", log.stamps))
+                                 read_relations(slam_file(f"{name}.relations"), log.stamps))
         figures[f"{name}: seconds"] = result.seconds
         figures[f"{name}: scans per second"] = len(log) / result.seconds
         figures[f"{name}: x faster than recorded"] = (log.stamps[-1] - log.stamps[0]) / \
@@ -362,26 +354,19 @@ def bench_correlative() -> dict[str, float]:
     return {"matches per second": count / (time.perf_counter() - start)}
 
 
-@benchmark("posegraph", "pose-graph LM: the shared SLAM graphs (chi2, s) and a 10,000-pose "
-           "simulated graph")
+@benchmark("posegraph", "pose-graph LM: the benchmark graphs in data/slam (chi2, s) and a "
+           "10,000-pose simulated graph")
 def bench_posegraph() -> dict[str, float]:
-    import sys
-
     from abcwc.mapping.g2o import read_g2o
     from abcwc.mapping.grid_graph import grid_world
     from abcwc.mapping.posegraph import optimise
-    from abcwc.mapping.slam_data import REFERENCE_GRAPHS, SLAM_DATA_ENV, slam_data_dir
+    from abcwc.mapping.slam_data import REFERENCE_GRAPHS, slam_file
 
     figures: dict[str, float] = {}
-    folder = slam_data_dir()
-    if folder.is_dir():
-        for name, reference in REFERENCE_GRAPHS.items():
-            _, result = optimise(read_g2o(folder / reference.file))
-            figures[f"{name}: chi2 (GTSAM {reference.chi2_gtsam:g})"] = result.chi2_final
-            figures[f"{name}: seconds (GTSAM {reference.seconds_gtsam:g})"] = result.seconds
-    else:
-        print(f"posegraph: shared graphs skipped, no folder {folder} (set {SLAM_DATA_ENV})",
-              file=sys.stderr)
+    for name, reference in REFERENCE_GRAPHS.items():
+        _, result = optimise(read_g2o(slam_file(reference.file)))
+        figures[f"{name}: chi2 (GTSAM {reference.chi2_gtsam:g})"] = result.chi2_final
+        figures[f"{name}: seconds (GTSAM {reference.seconds_gtsam:g})"] = result.seconds
     simulated = grid_world(10_000, seed=1, loops_per_pose=2)
     _, result = optimise(simulated.graph)
     figures["simulated 10,000 poses: edges"] = len(simulated.graph.edges)
@@ -389,31 +374,19 @@ def bench_posegraph() -> dict[str, float]:
     return figures
 
 
-def _slam_data() -> Path:
-    """The SLAM benchmark logs: ``ABCWC_SLAM_DATA``, else ``../shared/data/slam`` beside
-    the repository."""
-    from abcwc.mapping.slam_data import SLAM_DATA_ENV, slam_data_dir
-
-    path = slam_data_dir()
-    if not path.is_dir():
-        raise ValueError(f"SLAM benchmark data not found at {path} (set {SLAM_DATA_ENV})")
-    return path
-
-
 @benchmark("carmen", "CARMEN log parse time (s) per benchmark log; ICP matches per second "
                      "on 500 consecutive ACES scans")
 def bench_carmen() -> dict[str, float]:
     from abcwc.mapping.carmen import read_carmen_log
     from abcwc.mapping.icp import match_consecutive_scans
-    from abcwc.mapping.slam_data import LOG_FACTS
+    from abcwc.mapping.slam_data import LOG_FACTS, slam_file
 
-    data = _slam_data()
     figures: dict[str, float] = {}
     for name in ("aces", "mit-csail", "fr079"):
         start = time.perf_counter()
-        log = read_carmen_log(data / f"{name}.clf.gz")
+        log = read_carmen_log(slam_file(f"{name}.clf.gz"))
         figures[f"parse {name}.clf.gz ({len(log)} scans): s"] = time.perf_counter() - start
-    aces = read_carmen_log(data / "aces.clf.gz", **LOG_FACTS["aces"])
+    aces = read_carmen_log(slam_file("aces.clf.gz"), **LOG_FACTS["aces"])
     start = time.perf_counter()
     matches = len(match_consecutive_scans(aces, 1000, 1500))
     figures["ICP matches per second, ACES consecutive scans"] = (

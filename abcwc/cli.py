@@ -152,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
     build.set_defaults(run=_course_build)
 
     posegraph = commands.add_parser("posegraph", help="optimise a g2o pose graph (sparse LM)")
-    posegraph.add_argument("file", help="EDGE_SE2/VERTEX_SE2 graph, .g2o or .g2o.gz")
+    posegraph.add_argument("file", help="g2o graph (.g2o or .g2o.gz), e.g. data/slam/MIT.g2o.gz")
     posegraph.add_argument("--out", help="write the optimised graph here (.g2o or .g2o.gz)")
     posegraph.add_argument("--robust", choices=["huber", "cauchy"], help="robust kernel")
     posegraph.add_argument("--initial", choices=["lago", "given"], default="lago",
@@ -162,7 +162,7 @@ def build_parser() -> argparse.ArgumentParser:
     posegraph.set_defaults(run=_posegraph)
 
     slam = commands.add_parser("slam", help="graph SLAM on a CARMEN laser log")
-    slam.add_argument("log", help="CARMEN log (.clf or .clf.gz)")
+    slam.add_argument("log", help="CARMEN log (.clf or .clf.gz), e.g. data/slam/aces.clf.gz")
     slam.add_argument("--relations", help="benchmark relations file: print the errors")
     slam.add_argument("--out", default="abcwc-slam", help="folder for map and trajectory")
     slam.add_argument("--max-range", type=float, help="the laser's maximum range (m)")

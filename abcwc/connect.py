@@ -17,6 +17,7 @@ import os
 from collections.abc import Iterator
 
 from abcwc.base import Base
+from abcwc.devices import DeviceUnavailableError
 
 __all__ = ["HARDWARE_CELL_CAP", "PORT_ENV", "SIMAVR_PORT", "connect", "hardware_chair"]
 
@@ -80,8 +81,14 @@ def hardware_chair(speed_cap: int = HARDWARE_CELL_CAP, port: str | None = None,
       chair built from ``sim_options`` (the test suite runs every hardware cell this
       way), with the same cap.
 
-    On leaving the ``with`` block, normally or by an error, the chair stops and the
-    link closes. Use::
+    A device that is not there never crashes the cell: when the body cannot be opened
+    for want of one (no such port, permission denied, not our firmware, no AVR
+    toolchain or simavr), the message of its
+    :class:`~abcwc.devices.DeviceUnavailableError` is printed and ``None`` yielded; when
+    the block itself raises one (the microphone of chapter 04, say), the chair stops,
+    the message is printed and the cell goes on after the block. Any other error
+    propagates. On leaving the ``with`` block, normally or by an error, the chair stops
+    and the link closes. Use::
 
         with abcwc.hardware_chair(speed_cap=20, world="lab") as real:
             if real is not None:
@@ -98,7 +105,12 @@ def hardware_chair(speed_cap: int = HARDWARE_CELL_CAP, port: str | None = None,
         yield None
         return
     options = dict(sim_options) if port == SIMAVR_PORT else {}
-    chair = _hardware_body(port, {**options, "speed_cap": cap})
+    try:
+        chair = _hardware_body(port, {**options, "speed_cap": cap})
+    except DeviceUnavailableError as missing:
+        print(f"Skipping this real-chair cell: {missing}")
+        yield None
+        return
     try:
         params = chair.params
         about = f", about {cap / params.pot_full_scale_offset * params.max_speed:.2f} m/s"
@@ -109,5 +121,7 @@ def hardware_chair(speed_cap: int = HARDWARE_CELL_CAP, port: str | None = None,
             print(f"real chair on {port}: speed cap 128 +- {cap} pot bytes{about}. Keep a "
                   "hand near the joystick: it overrides every command.")
         yield chair
+    except DeviceUnavailableError as missing:
+        print(f"Stopped this real-chair cell: {missing}")
     finally:
         chair.close()

@@ -1,7 +1,7 @@
 """CARMEN logs and benchmark relations: small logs of our own, and the real benchmark logs.
 
-The real logs (Kümmerle et al. 2009) are read from ../shared/data/slam (see
-tests/slam_data.py); raw odometry must score the README's relation errors on them.
+The real logs (Kümmerle et al. 2009) are the project's own copies in data/slam; raw
+odometry must score the relation errors that data/slam/README.md gives for them.
 """
 
 from __future__ import annotations
@@ -20,8 +20,7 @@ from abcwc.mapping.relations import (
     read_relations,
     relation_errors,
 )
-from abcwc.mapping.slam_data import LOG_FACTS
-from tests.slam_data import slam_file
+from abcwc.mapping.slam_data import LOG_FACTS, slam_file
 
 # --- a small log of our own -------------------------------------------------------------
 
@@ -201,7 +200,7 @@ def test_format_relation_errors_gives_two_lines():
 
 # --- the real benchmark logs ------------------------------------------------------------
 
-# (log, relations, reader options, README's raw odometry error: m, deg)
+# (log, relations, reader options, data/slam/README.md's raw odometry error: m, deg)
 BENCHMARK_LOGS = {
     name: (f"{name}.clf.gz", f"{name}.relations", LOG_FACTS[name], metres, degrees)
     for name, metres, degrees in (("aces", 0.55, 2.2), ("mit-csail", 1.7, 5.1),

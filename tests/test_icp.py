@@ -23,9 +23,8 @@ from abcwc.mapping.icp import (
     scan_points,
 )
 from abcwc.mapping.relations import read_relations, relation_errors, relative_pose_errors
-from abcwc.mapping.slam_data import LOG_FACTS
+from abcwc.mapping.slam_data import LOG_FACTS, slam_file
 from abcwc.types import LaserScan
-from tests.slam_data import slam_file
 
 
 def segment_points(segments: list[tuple[float, float, float, float]], spacing: float,

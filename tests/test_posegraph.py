@@ -1,9 +1,7 @@
 """Pose graphs: g2o files in and out, the chi2 objective, sparse LM, the command line.
 
-The shared SLAM graphs (``../shared/data/slam`` or ``$ABCWC_SLAM_DATA``) check that the
-objective is the one GTSAM optimises (the README's chi2 at the start) and that LM gets
-as low as GTSAM's. Those tests skip when the data is missing, and fail instead under
-CI=true.
+The benchmark graphs in ``data/slam`` check that the objective is the one GTSAM optimises
+(``data/slam/README.md``'s chi2 at the start) and that LM gets as low as GTSAM's.
 """
 
 from __future__ import annotations
@@ -30,8 +28,7 @@ from abcwc.mapping.posegraph import (
     optimise,
     se2_log,
 )
-from abcwc.mapping.slam_data import REFERENCE_GRAPHS
-from tests.slam_data import slam_file
+from abcwc.mapping.slam_data import REFERENCE_GRAPHS, slam_file
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -202,12 +199,12 @@ def test_progress_callback_and_option_errors(small_world):
             optimise(small_world.graph, **bad)
 
 
-# --- the shared SLAM graphs ---------------------------------------------------------------
+# --- the benchmark SLAM graphs ------------------------------------------------------------
 
 
 @pytest.fixture(scope="module")
-def shared_results():
-    """Each shared graph: (graph, optimise's result), solved once for the module."""
+def benchmark_results():
+    """Each benchmark graph: (graph, optimise's result), solved once for the module."""
     results = {}
     for name, reference in REFERENCE_GRAPHS.items():
         graph = read_g2o(slam_file(reference.file))
@@ -216,15 +213,15 @@ def shared_results():
 
 
 @pytest.mark.parametrize("name", sorted(REFERENCE_GRAPHS))
-def test_shared_graphs_start_where_gtsam_starts(shared_results, name):
-    graph, result = shared_results[name]
+def test_benchmark_graphs_start_where_gtsam_starts(benchmark_results, name):
+    graph, result = benchmark_results[name]
     assert graph.poses_from == ("vertices" if name == "MIT" else "odometry")
     assert result.chi2_initial == pytest.approx(REFERENCE_GRAPHS[name].chi2_start, rel=1e-3)
 
 
 @pytest.mark.parametrize("name", sorted(REFERENCE_GRAPHS))
-def test_shared_graphs_end_at_or_below_gtsam(shared_results, name):
-    _, result = shared_results[name]
+def test_benchmark_graphs_end_at_or_below_gtsam(benchmark_results, name):
+    _, result = benchmark_results[name]
     assert result.converged
     assert result.chi2_final <= REFERENCE_GRAPHS[name].chi2_gtsam * 1.001
 

@@ -9,8 +9,7 @@ import pytest
 from abcwc.mapping.carmen import read_carmen_log
 from abcwc.mapping.relations import read_relations, relation_errors
 from abcwc.mapping.slam import SlamSettings, run_slam, scan_poses, select_keyframes
-from abcwc.mapping.slam_data import LOG_FACTS
-from tests.slam_data import slam_file
+from abcwc.mapping.slam_data import LOG_FACTS, slam_file
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -35,6 +35,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from abcwc.devices import DeviceUnavailableError
 from abcwc.hw import protocol as P
 from abcwc.hw.link import ChairLinkError, SerialLink
 from abcwc.hw.serial_base import LinkedBody
@@ -42,8 +43,8 @@ from abcwc.sim.base import SimBase
 from abcwc.sim.world import World
 from abcwc.types import Pose2D, PotCommand, SensorFrame
 
-__all__ = ["FirmwareInLoopBase", "FirmwareToolchainError", "build_harness", "missing_tools",
-           "FIRMWARE_DIR"]
+__all__ = ["FirmwareBuildError", "FirmwareInLoopBase", "FirmwareToolchainError",
+           "build_harness", "missing_tools", "FIRMWARE_DIR"]
 
 FIRMWARE_DIR = Path(__file__).resolve().parents[2] / "firmware"
 """The firmware sources (present in a repository checkout)."""
@@ -59,8 +60,14 @@ ARDUINO_CORE = Path("/usr/share/arduino/hardware/arduino/avr/cores/arduino")
 HARNESS_REPLY_TIMEOUT = 5.0  # s of wall time for one harness command
 
 
-class FirmwareToolchainError(RuntimeError):
-    """The AVR toolchain or simavr is missing, or the harness did not build."""
+class FirmwareToolchainError(DeviceUnavailableError):
+    """The firmware in the loop cannot run here: the AVR toolchain or simavr is missing
+    (the message names the Debian packages), or abcwc is an installed copy without the
+    firmware's sources."""
+
+
+class FirmwareBuildError(RuntimeError):
+    """The tools are there, but the harness did not build or would not start."""
 
 
 def missing_tools() -> list[str]:
@@ -97,8 +104,9 @@ def build_harness(firmware_dir: Path = FIRMWARE_DIR) -> tuple[Path, Path]:
     """Build (if needed) and return ``(harness, elf)``.
 
     Raises:
-        FirmwareToolchainError: no firmware sources, missing tools (naming the
-            Debian packages to install), or make failed (with its output).
+        FirmwareToolchainError: no firmware sources, or missing tools (naming the
+            Debian packages to install).
+        FirmwareBuildError: make failed (with its output).
     """
     firmware_dir = Path(firmware_dir)
     if not (firmware_dir / "Makefile").is_file():
@@ -115,7 +123,7 @@ def build_harness(firmware_dir: Path = FIRMWARE_DIR) -> tuple[Path, Path]:
         proc = subprocess.run(["make", "-C", str(firmware_dir), "harness"],
                               capture_output=True, text=True, timeout=900)
     if proc.returncode != 0:
-        raise FirmwareToolchainError(
+        raise FirmwareBuildError(
             f"make -C {firmware_dir} harness failed ({proc.returncode}):\n"
             f"{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
     build = firmware_dir / "build"
@@ -191,7 +199,7 @@ class FirmwareInLoopBase(LinkedBody):
                 stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                 text=True, bufsize=1)
         except OSError as exc:
-            raise FirmwareToolchainError(f"could not start {harness}: {exc}") from exc
+            raise FirmwareBuildError(f"could not start {harness}: {exc}") from exc
         line = self._proc.stdout.readline().strip()
         if not line.startswith("/dev/"):
             self._proc.kill()

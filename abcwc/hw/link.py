@@ -15,6 +15,7 @@ by the host).
 
 from __future__ import annotations
 
+import errno
 import functools
 import math
 import operator
@@ -27,12 +28,15 @@ import numpy as np
 
 from abcwc.control.interface_board import check_speed_cap
 from abcwc.control.velocity import twist_to_pot_command, twist_to_wire_units
+from abcwc.devices import DeviceUnavailableError
 from abcwc.hw import protocol as P
 from abcwc.types import PotCommand, SensorFrame, StatusFlags, Twist
 
 __all__ = [
     "ChairLinkError",
     "NoSuchPortError",
+    "NotOurFirmwareError",
+    "PortUnusableError",
     "ProtocolVersionError",
     "SerialLink",
     "STALL_LIMIT",
@@ -50,14 +54,28 @@ KNOWN_FLAGS = functools.reduce(operator.or_, StatusFlags, StatusFlags.NONE)
 
 
 class ChairLinkError(ConnectionError):
-    """The serial link to the chair failed: no port, no answer, or it went away."""
+    """The serial link to the chair failed: no port, no answer, or it went away.
+
+    The subclasses that are also a :class:`~abcwc.devices.DeviceUnavailableError` say
+    the chair is not there to talk to; a plain ChairLinkError is a link that failed
+    while in use."""
 
 
-class NoSuchPortError(ChairLinkError, FileNotFoundError):
+class NoSuchPortError(ChairLinkError, FileNotFoundError, DeviceUnavailableError):
     """The serial port does not exist (the message lists the ones that do)."""
 
 
-class ProtocolVersionError(ChairLinkError):
+class PortUnusableError(ChairLinkError, DeviceUnavailableError):
+    """The serial port exists but would not open: permission denied (the message says
+    how to join the ``dialout`` group), or another program holds it."""
+
+
+class NotOurFirmwareError(ChairLinkError, DeviceUnavailableError):
+    """Something is on the port, but it does not answer as ``abcwc_firmware`` (no HELLO
+    in time): another board, another sketch, or the wrong baud rate."""
+
+
+class ProtocolVersionError(ChairLinkError, DeviceUnavailableError):
     """The firmware speaks another protocol version than this library."""
 
 
@@ -80,7 +98,8 @@ def _no_port_message(port: str, why: str) -> str:
 
 
 def _open_port(port: str, baudrate: int):
-    """The pyserial port, or NoSuchPortError listing the ports there are."""
+    """The pyserial port; NoSuchPortError listing the ports there are, or
+    PortUnusableError saying why an existing port would not open."""
     import serial
 
     is_url = "://" in port
@@ -89,7 +108,15 @@ def _open_port(port: str, baudrate: int):
     try:
         return serial.Serial(port, baudrate, timeout=0.005, write_timeout=0.5)
     except serial.SerialException as exc:
-        raise NoSuchPortError(_no_port_message(port, f"could not be opened: {exc}")) from exc
+        if exc.errno in (errno.ENOENT, errno.ENODEV, errno.ENXIO):  # gone since the check
+            message = _no_port_message(port, f"could not be opened: {exc}")
+            raise NoSuchPortError(message) from exc
+        if exc.errno in (errno.EACCES, errno.EPERM):
+            why = ("permission denied: add yourself to the group that owns it, on Debian "
+                   "'sudo usermod -aG dialout $USER', then log out and in again")
+        else:
+            why = f"{exc}; is another program (a serial monitor?) using it?"
+        raise PortUnusableError(f"serial port {port!r} could not be opened: {why}") from exc
 
 
 def _command_message(command: PotCommand | Twist) -> tuple[type, dict, PotCommand]:
@@ -247,10 +274,11 @@ class SerialLink:
             if hello is not None:
                 return hello
             if now - start > ready_timeout:
-                raise self.link_error(
-                    f"no HELLO from the firmware within {ready_timeout:g} s "
-                    f"({self._decoder.bad_frames} bad frames received); is abcwc_firmware "
-                    f"flashed and the baud rate {self.baudrate}?")
+                raise NotOurFirmwareError(
+                    f"the device on {self.port_name} does not answer as abcwc_firmware: no "
+                    f"HELLO within {ready_timeout:g} s ({self._decoder.bad_frames} bad frames "
+                    f"received); flash it (make -C firmware flash) or pick the chair's port, "
+                    f"and check the baud rate is {self.baudrate}")
             if now - start > min(BOOT_WAIT, ready_timeout / 2) and (
                     asked_at is None or now - asked_at > 0.5):
                 self.ask_hello()

@@ -20,9 +20,13 @@ commanding (a controller returning None, a crashed notebook) stops the chair.
 ``run`` and ``drive`` send every period.
 
 Errors: a port that does not exist raises :class:`NoSuchPortError` listing the ports
-that do; firmware of another protocol version raises :class:`ProtocolVersionError`;
-no telemetry within ``timeout`` or, once telemetry flows, a silence of more than
-0.3 s or a failing port (a cable pulled mid-run) raises :class:`ChairLinkError`.
+that do; a port that will not open (permission denied, busy) :class:`PortUnusableError`;
+a device that sends no HELLO :class:`NotOurFirmwareError`; firmware of another protocol
+version :class:`ProtocolVersionError`. Those four are
+:class:`~abcwc.devices.DeviceUnavailableError`: the chair is not there to drive, and a
+real-chair cell says so and goes on. No telemetry within ``timeout`` or, once telemetry
+flows, a silence of more than 0.3 s or a failing port (a cable pulled mid-run) raises a
+plain :class:`ChairLinkError`.
 Bad frames from the chair are counted (``SensorFrame.bad_frames``), never raised.
 """
 
@@ -38,6 +42,8 @@ from abcwc.hw.link import (
     STALL_LIMIT,
     ChairLinkError,
     NoSuchPortError,
+    NotOurFirmwareError,
+    PortUnusableError,
     ProtocolVersionError,
     SerialLink,
     list_ports,
@@ -50,6 +56,8 @@ __all__ = [
     "ChairLinkError",
     "LinkedBody",
     "NoSuchPortError",
+    "NotOurFirmwareError",
+    "PortUnusableError",
     "ProtocolVersionError",
     "SerialBase",
     "DEFAULT_SPEED_CAP",

@@ -10,8 +10,8 @@ the submodules:
 * :mod:`~abcwc.mapping.map_io`: map_server YAML + PGM; :mod:`~abcwc.mapping.truth`:
   a world's walls as cells, and a map's precision and recall against them;
 * :mod:`~abcwc.mapping.carmen` and :mod:`~abcwc.mapping.relations`: real robot logs and
-  the relation metric of Kuemmerle et al. (2009); :mod:`~abcwc.mapping.slam_data`: where
-  the shared benchmark data lives;
+  the relation metric of Kuemmerle et al. (2009); :mod:`~abcwc.mapping.slam_data`: the
+  benchmark data in ``data/slam`` and its reference figures;
 * :mod:`~abcwc.mapping.icp` and :mod:`~abcwc.mapping.correlative`: point-to-line ICP
   (Censi 2008) and correlative scan matching (Olson 2009);
 * :mod:`~abcwc.mapping.g2o`, :mod:`~abcwc.mapping.posegraph` and

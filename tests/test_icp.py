@@ -20,7 +20,6 @@ from abcwc.mapping.icp import (
     line_normals,
     match_consecutive_scans,
     match_scans,
-    scan_points,
 )
 from abcwc.mapping.relations import read_relations, relation_errors, relative_pose_errors
 from abcwc.mapping.slam_data import LOG_FACTS
@@ -134,7 +133,7 @@ def test_match_scans_takes_laser_scans():
 
     true_pose = (0.1, 0.05, 0.08)
     reference, current = scan_from((0, 0, 0)), scan_from(true_pose)
-    assert len(scan_points(reference)) == 181  # every beam hits a wall
+    assert len(reference.points()) == 181  # every beam hits a wall
     result = match_scans(reference, current, (0.0, 0.0, 0.0))
     np.testing.assert_allclose(result.pose, true_pose, atol=0.02)  # beams quantise angles
 

@@ -261,14 +261,6 @@ def _covariance(jacobian: np.ndarray, residuals: np.ndarray) -> np.ndarray:
     return variance * (vectors / values) @ vectors.T
 
 
-def scan_points(scan: LaserScan) -> np.ndarray:
-    """A scan's endpoints ``(M, 2)`` in the laser frame (m), no-return beams dropped."""
-    ranges = np.asarray(scan.ranges, dtype=float)
-    valid = np.isfinite(ranges) & (ranges > scan.range_min) & (ranges < scan.range_max)
-    angles = scan.angles[valid]
-    return np.stack([ranges[valid] * np.cos(angles), ranges[valid] * np.sin(angles)], axis=-1)
-
-
 def match_scans(reference: LaserScan, current: LaserScan,
                 initial: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0),
                 **options: Any) -> IcpResult:
@@ -276,7 +268,7 @@ def match_scans(reference: LaserScan, current: LaserScan,
 
     ``initial`` is the first guess (e.g. from odometry); ``options`` go to :func:`icp`.
     """
-    return icp(scan_points(current), scan_points(reference), initial, **options)
+    return icp(current.points(), reference.points(), initial, **options)
 
 
 def match_consecutive_scans(log: CarmenLog, first: int = 0, last: int | None = None,

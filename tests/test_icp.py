@@ -11,11 +11,10 @@ import math
 import numpy as np
 import pytest
 
-from abcwc.geometry import compose, inverse_transform_points, relative
+from abcwc.geometry import chain_poses, inverse_transform_points, relative
 from abcwc.mapping.carmen import read_carmen_log
 from abcwc.mapping.icp import (
     TooFewPairsError,
-    chain,
     icp,
     line_normals,
     match_consecutive_scans,
@@ -158,7 +157,7 @@ def test_aces_consecutive_matches_beat_odometry_on_nearby_relations(aces):
     estimated = []
     for first, second in zip(relations.first, relations.second):
         deltas = match_consecutive_scans(log, int(first), int(second))
-        estimated.append(chain(np.zeros(3), deltas)[-1])
+        estimated.append(chain_poses(np.zeros(3), deltas)[-1])
     matched = relative_pose_errors(np.array(estimated), relations.reference)
     odometry = relation_errors(log.odometry, relations)
     assert matched.rotational_mean_deg < 0.6 * odometry.rotational_mean_deg
@@ -173,12 +172,3 @@ def test_aces_consecutive_match_is_fit_and_consistent(aces):
     assert result.converged and result.fitness > 0.75 and result.rms < 0.05
     assert np.all(np.linalg.eigvalsh(result.covariance) > 0)
     np.testing.assert_allclose(match_consecutive_scans(log, 1000, 1001)[0], result.pose)
-
-
-def test_chain_composes_relative_poses_in_turn():
-    rng = np.random.default_rng(2)
-    deltas = rng.normal(0, 1, (30, 3))
-    poses = [np.array([1.0, -2.0, 3.0])]
-    for delta in deltas:
-        poses.append(compose(poses[-1], delta))
-    np.testing.assert_allclose(chain(poses[0], deltas), poses, atol=1e-12)

@@ -298,14 +298,3 @@ def match_consecutive_scans(log: CarmenLog, first: int = 0, last: int | None = N
     return np.asarray(compose(compose(offset, deltas), inverse(offset)))
 
 
-def chain(start: np.ndarray | tuple[float, float, float], deltas: np.ndarray) -> np.ndarray:
-    """Poses ``(K + 1, 3)`` from ``start`` by composing relative poses ``(K, 3)`` in turn:
-    ``x_{k+1} = x_k (+) delta_k`` (headings by a cumulative sum, steps rotated by them)."""
-    start = np.asarray(start, dtype=float).reshape(3)
-    deltas = np.asarray(deltas, dtype=float).reshape(-1, 3)
-    headings = start[2] + np.concatenate([[0.0], np.cumsum(deltas[:, 2])])
-    c, s = np.cos(headings[:-1]), np.sin(headings[:-1])
-    steps = np.column_stack([c * deltas[:, 0] - s * deltas[:, 1],
-                             s * deltas[:, 0] + c * deltas[:, 1]])
-    xy = start[:2] + np.concatenate([[[0.0, 0.0]], np.cumsum(steps, axis=0)])
-    return np.column_stack([xy, wrap_angle(headings)])

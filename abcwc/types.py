@@ -27,11 +27,20 @@ def require_finite(name: str, value: float) -> float:
 
 @dataclass(frozen=True)
 class Pose2D:
-    """A planar pose: position (m) and heading (rad, counter-clockwise from x)."""
+    """A planar pose: position (m) and heading (rad, counter-clockwise from x).
+
+    Every field must be a finite number (ValueError otherwise, as for :class:`Twist`):
+    an unknown pose is ``None``, not a Pose2D of NaNs.
+    """
 
     x: float = 0.0
     y: float = 0.0
     theta: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "x", require_finite("Pose2D.x (m)", self.x))
+        object.__setattr__(self, "y", require_finite("Pose2D.y (m)", self.y))
+        object.__setattr__(self, "theta", require_finite("Pose2D.theta (rad)", self.theta))
 
     def as_array(self) -> np.ndarray:
         """``[x, y, theta]`` as a float array."""

@@ -134,6 +134,8 @@ def _as_pose(got: Any, what: str) -> Pose2D:
         x, y, theta = (float(v) for v in values)
     except (TypeError, ValueError):
         raise NotYet(f"{what} gave {format_value(got)}, expected a Pose2D(x, y, theta)") from None
+    expect(all(map(math.isfinite, (x, y, theta))),
+           f"{what} gave ({x:g}, {y:g}, {theta:g}); a pose is three finite numbers")
     return Pose2D(x, y, theta)
 
 

@@ -243,6 +243,8 @@ def _as_pose(got: object, what: str) -> Pose2D:
         arr = np.zeros(0)
     expect(arr.shape == (3,), f"{what} gave {format_value(got)}, expected a Pose2D "
            "(or x, y, theta)")
+    expect(bool(np.isfinite(arr).all()), f"{what} gave ({arr[0]:g}, {arr[1]:g}, {arr[2]:g}); "
+           "a pose is three finite numbers")
     return Pose2D(*map(float, arr))
 
 

@@ -17,6 +17,8 @@ from abcwc.params import ChairParams, default_params
 
 def require_finite(name: str, value: float) -> float:
     """Return ``value`` as float, or raise ValueError if it is not a finite number."""
+    if type(value) is float and math.isfinite(value):  # the common case, first: poses are hot
+        return value
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a finite number, got {value!r}")
     number = float(value)

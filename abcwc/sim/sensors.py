@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from abcwc.geometry import compose
+from abcwc.geometry import compose, transform_points
 from abcwc.params import ChairParams, GyroParams, IrRingParams, RangeSensorParams
 from abcwc.sim.raycast import cone_nearest_distance, ray_distances
 from abcwc.types import LaserScan, Pose2D
@@ -118,7 +118,7 @@ class IrRing:
     def read(self, pose: Pose2D, segments: np.ndarray, circles: np.ndarray) -> np.ndarray:
         """Six readings (m)."""
         p = self.params
-        origins = compose(pose, self.mounts)[:, :2]
+        origins = transform_points(pose, self.mounts[:, :2])  # the rangers in the world
         out = ray_distances(origins, pose.theta + self.mounts[:, 2], segments, circles,
                             p.max_range + 4 * p.noise_std)
         out = out + self._noise.next() * p.noise_std

@@ -424,8 +424,10 @@ def bench_notebooks() -> dict[str, float]:
     return figures
 
 
-def run_benchmarks(names: list[str] | None = None, repeats: int = 3) -> dict[str, dict]:
-    """Run the named benchmarks (all if None); medians of ``repeats`` runs."""
+def run_benchmarks(names: list[str] | None = None, repeats: int = 3,
+                   progress: bool = False) -> dict[str, dict]:
+    """Run the named benchmarks (all if None); medians of ``repeats`` runs. ``progress``
+    shows a tqdm bar (on stderr) of the runs done, named by the benchmark running."""
     names = names or list(BENCHMARKS)
     unknown = [n for n in names if n not in BENCHMARKS]
     if unknown:
@@ -433,11 +435,18 @@ def run_benchmarks(names: list[str] | None = None, repeats: int = 3) -> dict[str
                          f"available: {', '.join(BENCHMARKS)}")
     if repeats < 1:
         raise ValueError(f"repeats {repeats} outside 1..")
+    counts = {name: repeats if BENCHMARKS[name][2] else 1 for name in names}
+    from tqdm.auto import tqdm
+
     results: dict[str, dict] = {}
-    for name in names:
-        _, fn, repeat = BENCHMARKS[name]
-        runs = [fn() for _ in range(repeats if repeat else 1)]
-        results[name] = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
+    with tqdm(total=sum(counts.values()), desc="bench", unit="run", disable=not progress) as bar:
+        for name in names:
+            bar.set_description(f"bench {name}")
+            runs = []
+            for _ in range(counts[name]):
+                runs.append(BENCHMARKS[name][1]())
+                bar.update(1)
+            results[name] = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
     return results
 
 

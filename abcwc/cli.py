@@ -1,27 +1,84 @@
-"""The ``abcwc`` command: ``demo``, ``bench``, ``posegraph``, ``slam`` and ``course build``.
+"""The abcwc command: demo, bench, posegraph, slam, navtrial and course build.
+
+Every command takes the same few options:
+
+- ``--quiet``: no progress bars (they are on by default and go to stderr);
+- ``--json``: the figures as one JSON object on stdout instead of text (every command
+  that prints figures: demo, bench, posegraph, slam, navtrial);
+- ``--out DIR``: a folder, created when the command writes into it (demo, posegraph, slam);
+- ``--debug``: an error shows its traceback.
 
 A mistake in what the user gave (an unknown world or benchmark, a bad number, a missing
-data folder, ``course build`` outside a checkout, ...) ends the command with one line
-``abcwc: error: <message>`` on stderr and exit status 2; argparse reports what it
-finds itself (an unknown option, a value of the wrong type) its own way, also with 2.
+file or data folder, ``course build`` outside a checkout, ...) ends the command with one
+line ``abcwc: error: <message>`` on stderr and exit status 2; argparse reports what it
+finds itself (an unknown option, a value of the wrong type) its own way, also with 2. Any
+other exception is a bug in abcwc: one line says so (exit status 1, as Python's own for an
+uncaught exception), and ``--debug`` shows its traceback. Options are checked before any
+folder is made, so a refused command leaves nothing behind.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
+import json
+import math
 import sys
 from pathlib import Path
 
 PROG = "abcwc"
 USAGE_ERROR = 2
+INTERNAL_ERROR = 1
 
-USER_ERRORS: tuple[type[Exception], ...] = (ValueError, OSError)
+USER_ERRORS: tuple[type[Exception], ...] = (
+    ValueError, FileNotFoundError, IsADirectoryError, NotADirectoryError, PermissionError,
+    FileExistsError)
 """What the library raises for bad input: ValueError for a bad value (an unknown world or
-benchmark, a negative seed or duration), OSError for a file or folder (a missing data
-folder or world file, an output folder that cannot be written, no checkout)."""
+benchmark, a negative seed or duration, a file that is not what it should be; abcwc's own
+input errors, such as GraphFileError or WorldError, are ValueErrors), and the OSErrors of
+a path the user named (missing, a folder where a file belongs or the other way round, not
+readable or writable; NotACheckoutError is a FileNotFoundError)."""
+
+
+def _version() -> str:
+    from abcwc import __version__
+
+    return __version__
+
+
+def _print_json(figures: dict) -> None:
+    """``figures`` as JSON on stdout: NumPy numbers as plain ones, NaN and infinity as
+    null (JSON has neither)."""
+
+    def plain(value: object) -> object:
+        if isinstance(value, dict):
+            return {str(k): plain(v) for k, v in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [plain(v) for v in value]
+        if hasattr(value, "item"):  # a NumPy scalar
+            value = value.item()  # type: ignore[union-attr]
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        return value
+
+    print(json.dumps(plain(figures), indent=2, sort_keys=True))
+
+
+def _out_folder(path: str) -> Path:
+    """``--out`` as a folder to write into, checked now and made later (only when the
+    command has something to write): an existing file there is refused."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"--out {out}: a file is there; --out names a folder")
+    return out
 
 
 def _demo(args: argparse.Namespace) -> int:
+    if not (math.isfinite(args.seconds) and args.seconds > 0):
+        raise ValueError(f"--seconds must be a finite number > 0, got {args.seconds:g}")
+    out = _out_folder(args.out)
+
     import matplotlib
 
     matplotlib.use("Agg")
@@ -31,7 +88,6 @@ def _demo(args: argparse.Namespace) -> int:
     from abcwc.navigation import SonarAvoider
     from abcwc.sim import SimBase
 
-    out = Path(args.out)
     chair = SimBase(world=args.world, seed=args.seed)
     out.mkdir(parents=True, exist_ok=True)
     log = chair.run(SonarAvoider(), args.seconds, progress=not args.quiet)
@@ -42,17 +98,30 @@ def _demo(args: argparse.Namespace) -> int:
     animation = viz.animate_run(log, chair.world)
     animation_path = viz.save_animation(animation, out / "demo_wander.gif")
     log_path = log.save(out / "demo_wander.npz")
+    files = [str(plot_path), str(animation_path), str(log_path)]
+    if args.json:
+        _print_json({"world": chair.world.name, "seed": args.seed,
+                     "seconds": float(log.t[-1] - log.t[0] + log.period),
+                     "distance_m": log.distance_travelled() if log.has_ground_truth
+                     else None,
+                     "collisions": int(log.collisions[-1]), "files": files})
+        return 0
     print(f"sonar-avoidance wander in {chair.world.name} (seed {args.seed}): {log.summary()}; "
-          f"wrote {plot_path}, {animation_path}, {log_path}")
+          f"wrote {', '.join(files)}")
     return 0
 
 
 def _bench(args: argparse.Namespace) -> int:
     from abcwc.bench import format_table, run_benchmarks, to_json
 
-    results = run_benchmarks(args.names or None, repeats=args.repeats)
+    results = run_benchmarks(args.names or None, repeats=args.repeats,
+                             progress=not args.quiet)
     print(to_json(results) if args.json else format_table(results))
     return 0
+
+
+POSEGRAPH_FILE = "optimised.g2o"
+"""What ``posegraph --out DIR`` writes in DIR: the graph with its optimised poses."""
 
 
 def _posegraph(args: argparse.Namespace) -> int:
@@ -60,20 +129,32 @@ def _posegraph(args: argparse.Namespace) -> int:
     from abcwc.mapping.g2o import read_g2o, write_g2o
     from abcwc.mapping.posegraph import optimise
 
+    out = _out_folder(args.out) if args.out else None
     graph = read_g2o(args.file)
     poses, result = optimise(graph, robust=args.robust, initial=args.initial,
-                             max_iterations=args.max_iterations, progress=args.progress)
-    if args.out:
-        write_g2o(graph.with_poses(poses), args.out)
+                             max_iterations=args.max_iterations, progress=not args.quiet)
+    files = []
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        files.append(str(write_g2o(graph.with_poses(poses), out / POSEGRAPH_FILE)))
+    if args.json:
+        _print_json({"file": args.file, "poses": len(graph.poses),
+                     "edges": len(graph.edges), "chi2_initial": result.chi2_initial,
+                     "chi2_final": result.chi2_final, "iterations": result.iterations,
+                     "seconds": result.seconds, "converged": result.converged,
+                     "reason": result.reason, "files": files})
+        return 0
     print(f"chi2 initial {result.chi2_initial:.6g} final {result.chi2_final:.6g}, "
           f"{result.iterations} iterations, {result.seconds:.3f} s ({result.reason})")
-    if args.out:
-        print(f"wrote {args.out}")
+    if files:
+        print(f"wrote {files[0]}")
     return 0
 
 
 def _slam(args: argparse.Namespace) -> int:
     """Graph SLAM on a CARMEN log: map and trajectory to a folder, relation errors."""
+    out = _out_folder(args.out)
+
     import numpy as np
 
     from abcwc.mapping.carmen import read_carmen_log
@@ -86,19 +167,39 @@ def _slam(args: argparse.Namespace) -> int:
                           else tuple(args.laser_offset))
     relations = read_relations(args.relations, log.stamps) if args.relations else None
     result = run_slam(log, progress=not args.quiet)
-    out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     save_map(render(log, result.scan_poses, result.keyframes), out / "map.yaml")
     trajectory = np.column_stack([log.stamps, result.scan_poses])
     np.savetxt(out / "trajectory.txt", trajectory, fmt="%.6f",
                header="stamp (s) x (m) y (m) theta (rad): one line per scan")
+    files = [str(out / name) for name in ("map.yaml", "map.pgm", "trajectory.txt")]
     duration = float(log.stamps[-1] - log.stamps[0])
+    errors = relation_errors(result.laser_poses, relations) if relations is not None else None
+    if args.json:
+        _print_json({
+            "log": args.log, "scans": len(log), "keyframes": len(result.keyframes),
+            "loop_closures": result.loops, "seconds": result.seconds,
+            "times_faster_than_recorded": duration / result.seconds,
+            "relation_errors": None if errors is None else {
+                "relations": len(errors.translational),
+                "translational_mean_m": errors.translational_mean,
+                "translational_std_m": errors.translational_std,
+                "rotational_mean_deg": errors.rotational_mean_deg,
+                "rotational_std_deg": errors.rotational_std_deg},
+            "files": files})
+        return 0
     print(f"{len(log)} scans, {len(result.keyframes)} keyframes, {result.loops} loop closures "
           f"in {result.seconds:.1f} s ({duration / result.seconds:.0f}x faster than recorded)")
-    if relations is not None:
-        print(format_relation_errors(relation_errors(result.laser_poses, relations)))
-    print(f"wrote {out / 'map.yaml'}, {out / 'map.pgm'} and {out / 'trajectory.txt'}")
+    if errors is not None:
+        print(format_relation_errors(errors))
+    print(f"wrote {files[0]}, {files[1]} and {files[2]}")
     return 0
+
+
+NAVTRIAL_GOAL_FIGURES = ("status", "reason", "reached", "seconds", "driven", "straight",
+                         "planned", "final_error", "final_heading_error", "collisions",
+                         "lethal_periods", "closest_person", "max_localisation_error", "phases")
+"""Each goal's figures in ``navtrial --json`` (m, s, rad; GoalOutcome's names)."""
 
 
 def _navtrial(args: argparse.Namespace) -> int:
@@ -109,6 +210,16 @@ def _navtrial(args: argparse.Namespace) -> int:
         raise ValueError(f"--goals must be at least 1, got {args.goals}")
     result = run_trial(goals=args.goals, seed=args.seed, world=args.world,
                        people=not args.no_people, progress=not args.quiet)
+    if args.json:
+        _print_json({
+            "world": args.world, "seed": args.seed, "people": not args.no_people,
+            "goals": len(result.outcomes), "success_rate": result.success_rate,
+            "collisions": result.collisions, "lethal_periods": result.lethal_periods,
+            "closest_person": result.closest_person,
+            "outcomes": [{"goal": [o.goal.x, o.goal.y, o.goal.theta],
+                          **{name: getattr(o, name) for name in NAVTRIAL_GOAL_FIGURES}}
+                         for o in result.outcomes]})
+        return 0
     print(result.summary())
     return 0
 
@@ -116,33 +227,58 @@ def _navtrial(args: argparse.Namespace) -> int:
 def _course_build(args: argparse.Namespace) -> int:
     from abcwc import course
 
-    return course.run(args.solutions, args.course, check=args.check)
+    if not args.quiet:
+        return course.run(args.solutions, args.course, check=args.check)
+    with contextlib.redirect_stdout(io.StringIO()):  # the exit status still tells
+        return course.run(args.solutions, args.course, check=args.check)
+
+
+def _common_options(for_every_command: bool) -> argparse.ArgumentParser:
+    """``--quiet`` and ``--debug``, given before the command or after it. A command's
+    copy has no default of its own (SUPPRESS), so it does not undo the one before it."""
+    common = argparse.ArgumentParser(add_help=False)
+    default = argparse.SUPPRESS if for_every_command else False
+    common.add_argument("--quiet", action="store_true", default=default,
+                        help="no progress bars (course build: print nothing but errors)")
+    common.add_argument("--debug", action="store_true", default=default,
+                        help="show the traceback of an error")
+    return common
+
+
+def _json_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--json", action="store_true",
+                        help="print the figures as JSON instead of text")
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The command-line parser."""
-    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0],
+                                     parents=[_common_options(False)])
+    parser.add_argument("--version", action="version", version=f"{PROG} {_version()}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    common = [_common_options(True)]
 
-    demo = commands.add_parser("demo", help="run the headless course demo")
-    demo.add_argument("--out", default="abcwc-demo", help="folder for the plot, animation, log")
+    demo = commands.add_parser("demo", help="run the headless course demo", parents=common)
+    demo.add_argument("--out", default="abcwc-demo", metavar="DIR",
+                      help="folder for the plot, animation and log (default: abcwc-demo)")
     demo.add_argument("--world", default="lab", help="a world's name or a .json world file")
     demo.add_argument("--seed", type=int, default=0)
     demo.add_argument("--seconds", type=float, default=300.0, help="simulated seconds")
-    demo.add_argument("--quiet", action="store_true", help="no progress bar")
+    _json_option(demo)
     demo.set_defaults(run=_demo)
 
-    bench = commands.add_parser("bench", help="run the benchmarks")
+    bench = commands.add_parser("bench", help="run the benchmarks", parents=common)
     bench.add_argument("names", nargs="*", help="benchmarks to run (default: all)")
-    bench.add_argument("--json", action="store_true", help="print JSON instead of a table")
     bench.add_argument("--repeats", type=int, default=3)
+    _json_option(bench)
     bench.set_defaults(run=_bench)
 
     course = commands.add_parser("course", help="build the student notebooks: course build")
     actions = course.add_subparsers(dest="action", required=True, metavar="ACTION")
     build = actions.add_parser(
         "build", help="regenerate course/ from solutions/ (in a checkout of the repository)",
-        description="Build the student notebooks in course/ from the solutions.")
+        description="Build the student notebooks in course/ from the solutions.",
+        parents=common)
     build.add_argument("--check", action="store_true",
                        help="write nothing; exit 1 if course/ is not what a build would write")
     build.add_argument("--solutions", metavar="DIR",
@@ -151,33 +287,40 @@ def build_parser() -> argparse.ArgumentParser:
                        help="student notebooks to write (default: course)")
     build.set_defaults(run=_course_build)
 
-    posegraph = commands.add_parser("posegraph", help="optimise a g2o pose graph (sparse LM)")
-    posegraph.add_argument("file", help="g2o graph (.g2o or .g2o.gz), e.g. data/slam/MIT.g2o.gz")
-    posegraph.add_argument("--out", help="write the optimised graph here (.g2o or .g2o.gz)")
+    posegraph = commands.add_parser("posegraph", help="optimise a g2o pose graph (sparse LM)",
+                                    parents=common)
+    posegraph.add_argument("file", help="EDGE_SE2/VERTEX_SE2 graph, .g2o or .g2o.gz, e.g. "
+                                        "data/slam/MIT.g2o.gz")
+    posegraph.add_argument("--out", metavar="DIR",
+                           help=f"folder to write {POSEGRAPH_FILE} in: the graph with its "
+                                "optimised poses (default: write nothing)")
     posegraph.add_argument("--robust", choices=["huber", "cauchy"], help="robust kernel")
     posegraph.add_argument("--initial", choices=["lago", "given"], default="lago",
                            help="start from LAGO's estimate (default) or the file's poses")
     posegraph.add_argument("--max-iterations", type=int, default=100)
-    posegraph.add_argument("--progress", action="store_true", help="show a progress bar")
+    _json_option(posegraph)
     posegraph.set_defaults(run=_posegraph)
 
-    slam = commands.add_parser("slam", help="graph SLAM on a CARMEN laser log")
+    slam = commands.add_parser("slam", help="graph SLAM on a CARMEN laser log", parents=common)
     slam.add_argument("log", help="CARMEN log (.clf or .clf.gz), e.g. data/slam/aces.clf.gz")
     slam.add_argument("--relations", help="benchmark relations file: print the errors")
-    slam.add_argument("--out", default="abcwc-slam", help="folder for map and trajectory")
+    slam.add_argument("--out", default="abcwc-slam", metavar="DIR",
+                      help="folder for map.yaml, map.pgm and trajectory.txt "
+                           "(default: abcwc-slam)")
     slam.add_argument("--max-range", type=float, help="the laser's maximum range (m)")
     slam.add_argument("--laser-offset", type=float, nargs=3, metavar=("X", "Y", "THETA"),
                       help="the laser's pose on the robot (m, m, rad)")
-    slam.add_argument("--quiet", action="store_true", help="no progress bar")
+    _json_option(slam)
     slam.set_defaults(run=_slam)
 
     navtrial = commands.add_parser(
-        "navtrial", help="drive the navigator to seeded random goals, judged by ground truth")
+        "navtrial", help="drive the navigator to seeded random goals, judged by ground truth",
+        parents=common)
     navtrial.add_argument("--goals", type=int, default=50)
     navtrial.add_argument("--seed", type=int, default=0)
     navtrial.add_argument("--world", default="floor", help="a world's name or a .json file")
     navtrial.add_argument("--no-people", action="store_true", help="without walking people")
-    navtrial.add_argument("--quiet", action="store_true", help="no progress bar")
+    _json_option(navtrial)
     navtrial.set_defaults(run=_navtrial)
     return parser
 
@@ -192,14 +335,27 @@ def error_line(exc: BaseException) -> str:
     return f"{PROG}: error: {' '.join(line for line in lines if line)}"
 
 
+def bug_line(exc: BaseException) -> str:
+    """The one line for an exception that is not the user's mistake."""
+    detail = " ".join(str(exc).split())
+    raised = type(exc).__name__ + (f": {detail}" if detail else "")
+    return (f"{PROG}: internal error: {raised} (a bug in abcwc, not in what you asked for: "
+            "please report it; run the command again with --debug to see the traceback)")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``abcwc`` console script; returns the exit status."""
     args = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
     try:
         return args.run(args)
-    except USER_ERRORS as exc:
-        print(error_line(exc), file=sys.stderr)
-        return USAGE_ERROR
+    except Exception as exc:  # noqa: BLE001 - every error ends in one line, or a traceback
+        if args.debug:
+            raise
+        if isinstance(exc, USER_ERRORS):
+            print(error_line(exc), file=sys.stderr)
+            return USAGE_ERROR
+        print(bug_line(exc), file=sys.stderr)
+        return INTERNAL_ERROR
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ does::
     tree = FrameTree.from_description(chair_description())
     tree.set_pose("map", "odom", Pose2D(0, 0, 0))
     tree.set_pose("odom", "base_link", odometry_pose)
-    points_in_map = tree.transform_points(scan_points, "lidar_link", "map")
+    points_in_map = tree.transform_points(scan.points(), "lidar_link", "map")
 """
 
 from __future__ import annotations

@@ -74,6 +74,11 @@ def compose(a: PoseLike, b: PoseLike) -> Pose2D | np.ndarray:
     arrays of poses.
     """
     pa, pb = _as_poses(a), _as_poses(b)
+    if pa.ndim == 1 and pb.ndim == 1:  # one pose each: in floats, five times faster
+        (xa, ya, ta), (xb, yb, tb) = pa.tolist(), pb.tolist()
+        c, s = math.cos(ta), math.sin(ta)
+        return _answer(np.array([xa + c * xb - s * yb, ya + s * xb + c * yb,
+                                 wrap_angle(ta + tb)]), a, b)
     c, s = np.cos(pa[..., 2]), np.sin(pa[..., 2])
     out = np.stack([pa[..., 0] + c * pb[..., 0] - s * pb[..., 1],
                     pa[..., 1] + s * pb[..., 0] + c * pb[..., 1],
@@ -103,6 +108,25 @@ def relative(a: PoseLike, b: PoseLike) -> Pose2D | np.ndarray:
     out = np.stack([c * dx + s * dy, -s * dx + c * dy,
                     wrap_angle(pb[..., 2] - pa[..., 2])], axis=-1)
     return _answer(out, a, b)
+
+
+def chain_poses(start: PoseLike, steps: np.ndarray) -> np.ndarray:
+    """Poses ``(K + 1, 3)`` from ``start`` by composing relative poses ``steps`` ``(K, 3)``
+    in turn, ``x_{k+1} = x_k (+) step_k`` (eqn 1 of Smith, Self and Cheeseman 1990), all
+    at once: the headings by a cumulative sum, then each step rotated into the parent by
+    the heading before it, and the moves summed. Odometry chained into a path, a pose
+    graph's first guess from its ``i -> i + 1`` edges, scan matches into a trajectory.
+    """
+    first = _as_poses(start)
+    if first.shape != (3,):
+        raise ValueError(f"start must be one pose (x, y, theta), got shape {first.shape}")
+    moves = np.asarray(steps, dtype=float).reshape(-1, 3)
+    headings = first[2] + np.concatenate([[0.0], np.cumsum(moves[:, 2])])  # unwrapped
+    c, s = np.cos(headings[:-1]), np.sin(headings[:-1])
+    in_parent = np.column_stack([c * moves[:, 0] - s * moves[:, 1],
+                                 s * moves[:, 0] + c * moves[:, 1]])
+    xy = first[:2] + np.concatenate([[[0.0, 0.0]], np.cumsum(in_parent, axis=0)])
+    return np.column_stack([xy, wrap_angle(headings)])
 
 
 def transform_points(pose: PoseLike, points: np.ndarray) -> np.ndarray:

@@ -11,6 +11,7 @@ that needs its images keeps the ones it needs itself.
 from __future__ import annotations
 
 import json
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -56,6 +57,12 @@ CHANNELS = {
 }
 """The channels every recorded run has, with their units. A frame's other scalar
 readings become channels named by their frame id; its scans become :class:`ScanLog`."""
+
+
+class LogFileError(ValueError):
+    """A file that :meth:`RunLog.load` cannot read as a RunLog: the message names the
+    file and what is wrong with it."""
+
 
 _V1_SCANS = {"lidar": LIDAR_FRAME, "depth_scan": DEPTH_SCAN_FRAME}  # v1 names -> frame ids
 _UNSET = object()
@@ -207,17 +214,45 @@ class RunLog:
     @classmethod
     def load(cls, path: str | Path) -> RunLog:
         """Read a log written by :meth:`save` (format version 2) or by abcwc's first
-        format (version 1, one array per fixed field)."""
-        with np.load(Path(path), allow_pickle=False) as data:
-            meta = json.loads(str(data["meta"]))
-            version = (int(data["format_version"]) if "format_version" in data.files
-                       else meta.get("format_version"))
+        format (version 1, one array per fixed field).
+
+        A missing file is a ``FileNotFoundError``, a folder an ``IsADirectoryError``; a
+        file that is not an ``.npz``, or an ``.npz`` that is not a RunLog, a
+        :class:`LogFileError`. Each names the file and the problem."""
+        path = Path(path)
+        if path.is_dir():
+            raise IsADirectoryError(f"{path}: a folder, not a RunLog file (.npz)")
+        if not path.exists():
+            raise FileNotFoundError(f"{path}: no such file (a RunLog is an .npz from "
+                                    "RunLog.save)")
+        try:
+            data = np.load(path, allow_pickle=False)
+        except (ValueError, EOFError, zipfile.BadZipFile):  # numpy's own words mislead here
+            raise LogFileError(f"{path}: not an .npz file (a RunLog is an .npz from "
+                               "RunLog.save)") from None
+        if not isinstance(data, np.lib.npyio.NpzFile):
+            raise LogFileError(f"{path}: a single NumPy array (.npy), not a RunLog's .npz")
+        with data:
+            if "meta" not in data.files:
+                held = ", ".join(data.files[:5]) + (", ..." if len(data.files) > 5 else "")
+                raise LogFileError(f"{path}: an .npz without a RunLog's 'meta' (it holds "
+                                   f"{held or 'nothing'}): not a RunLog")
+            try:
+                meta = json.loads(str(data["meta"]))
+                version = (int(data["format_version"]) if "format_version" in data.files
+                           else meta.get("format_version"))
+            except (ValueError, TypeError, AttributeError) as exc:
+                raise LogFileError(f"{path}: its 'meta' is not a RunLog's ({exc})") from None
             if version not in READABLE_VERSIONS:
-                raise ValueError(f"{path}: log format {version!r}, this abcwc reads versions "
-                                 f"{', '.join(map(str, READABLE_VERSIONS))}")
+                raise LogFileError(f"{path}: log format {version!r}, this abcwc reads "
+                                   f"versions {', '.join(map(str, READABLE_VERSIONS))}")
             reader = _read_v1 if version == 1 else _read_v2
-            channels, scans = reader(data)
-        return cls(channels, meta=meta, scans=scans)
+            try:
+                channels, scans = reader(data)
+                return cls(channels, meta=meta, scans=scans)
+            except (KeyError, ValueError) as exc:
+                raise LogFileError(f"{path}: not a RunLog of format {version} "
+                                   f"({exc})") from None
 
 
 def _scan_log(data: np.lib.npyio.NpzFile, prefix: str) -> ScanLog:

@@ -17,6 +17,8 @@ from abcwc.params import ChairParams, default_params
 
 def require_finite(name: str, value: float) -> float:
     """Return ``value`` as float, or raise ValueError if it is not a finite number."""
+    if type(value) is float and math.isfinite(value):  # the common case, first: poses are hot
+        return value
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a finite number, got {value!r}")
     number = float(value)
@@ -27,11 +29,20 @@ def require_finite(name: str, value: float) -> float:
 
 @dataclass(frozen=True)
 class Pose2D:
-    """A planar pose: position (m) and heading (rad, counter-clockwise from x)."""
+    """A planar pose: position (m) and heading (rad, counter-clockwise from x).
+
+    Every field must be a finite number (ValueError otherwise, as for :class:`Twist`):
+    an unknown pose is ``None``, not a Pose2D of NaNs.
+    """
 
     x: float = 0.0
     y: float = 0.0
     theta: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "x", require_finite("Pose2D.x (m)", self.x))
+        object.__setattr__(self, "y", require_finite("Pose2D.y (m)", self.y))
+        object.__setattr__(self, "theta", require_finite("Pose2D.theta (rad)", self.theta))
 
     def as_array(self) -> np.ndarray:
         """``[x, y, theta]`` as a float array."""
@@ -92,7 +103,9 @@ class StatusFlags(IntFlag):
 class LaserScan:
     """A planar range scan, ROS sensor_msgs/LaserScan fields.
 
-    ``ranges`` holds metres; ``inf`` means no return within ``range_max``.
+    ``ranges`` holds metres, one per beam; beam ``k`` points ``angle_min + k
+    angle_increment`` rad from the sensor's x axis. REP 117: ``inf`` means no return
+    within ``range_max``, ``-inf`` an object closer than ``range_min``, NaN no reading.
     """
 
     angle_min: float
@@ -106,6 +119,49 @@ class LaserScan:
     def angles(self) -> np.ndarray:
         """Beam angles (rad) in the sensor frame."""
         return self.angle_min + self.angle_increment * np.arange(len(self.ranges))
+
+    def _limit(self, max_range: float | None) -> float:
+        if max_range is None:
+            return self.range_max
+        if not (isinstance(max_range, (int, float, np.integer, np.floating))
+                and max_range > 0):
+            raise ValueError(f"max_range must be a number > 0 m (or None), got {max_range!r}")
+        return min(float(max_range), self.range_max)
+
+    def hits(self, max_range: float | None = None) -> np.ndarray:
+        """Which beams returned (bool, one per beam): a finite range ``r`` with
+        ``range_min <= r <= range_max`` (sensor_msgs/LaserScan: readings outside those
+        bounds are to be discarded), and ``r <= max_range`` (m) when it is given. inf,
+        -inf, NaN and finite readings outside the bounds are not returns."""
+        ranges = np.asarray(self.ranges, dtype=float)
+        return (np.isfinite(ranges) & (ranges >= self.range_min)
+                & (ranges <= self._limit(max_range)))
+
+    def misses(self, max_range: float | None = None) -> np.ndarray:
+        """Which beams saw nothing up to the limit, ``range_max`` or ``max_range`` (m) if
+        nearer (bool, one per beam): ``inf``, or a finite range beyond the limit. -inf
+        (too close) and NaN (no reading) are neither hits nor misses."""
+        ranges = np.asarray(self.ranges, dtype=float)
+        return (ranges == np.inf) | (np.isfinite(ranges) & (ranges > self._limit(max_range)))
+
+    def points(self, max_range: float | None = None, *, with_misses: bool = False
+               ) -> np.ndarray:
+        """The returns as ``(N, 2)`` x, y (m) in the sensor frame, in beam order: one row
+        per beam of :meth:`hits` (``r cos(angle), r sin(angle)``; ``max_range`` (m) drops
+        the returns beyond it too).
+
+        ``with_misses``: also a row for each beam of :meth:`misses`, at the limit
+        (``range_max``, or ``max_range`` if nearer) along the beam, still in beam order:
+        the ends of the rays a mapper traces as free (costmap_2d does the same with
+        ``inf_is_valid``); ``hits(max_range)[hits(max_range) | misses(max_range)]`` says
+        which rows are returns.
+        """
+        ranges = np.asarray(self.ranges, dtype=float)
+        hit = self.hits(max_range)
+        used = hit | self.misses(max_range) if with_misses else hit
+        length = np.where(hit, ranges, self._limit(max_range))[used]
+        angles = self.angles[used]
+        return np.column_stack([length * np.cos(angles), length * np.sin(angles)])
 
 
 @dataclass(frozen=True)

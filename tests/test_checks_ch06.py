@@ -105,6 +105,11 @@ def test_odometry_step_returning_nothing_is_not_yet(capsys):
                    "expected a Pose2D")
 
 
+def test_odometry_step_returning_nan_is_not_yet(capsys):
+    assert_not_yet(ch06.odometry_step_check(lambda *args: (math.nan, 0.0, 0.0)), capsys,
+                   "gave (nan, 0, 0); a pose is three finite numbers")
+
+
 # --- exercise 3: the whole log --------------------------------------------------------
 
 

@@ -180,6 +180,11 @@ def test_fused_step_returning_something_else_is_not_yet(capsys):
     assert_not_yet(ch09.fused_step_check(lambda *args: 1.0), capsys, "expected a Pose2D")
 
 
+def test_fused_step_returning_nan_is_not_yet(capsys):
+    assert_not_yet(ch09.fused_step_check(lambda *args: (0.0, math.inf, 0.0)), capsys,
+                   "gave (0, inf, 0); a pose is three finite numbers")
+
+
 def test_fused_step_not_written(capsys):
     assert_not_yet(ch09.fused_step_check(not_written), capsys, "not written yet")
 

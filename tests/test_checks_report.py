@@ -14,6 +14,7 @@ from abcwc.checks import (
     expect,
     expect_close,
     expect_equal,
+    expect_no_slip,
     format_value,
     use_or_fallback,
 )
@@ -214,6 +215,35 @@ def test_expect_equal_handles_arrays_and_tuples():
         "pots gave (1, 3), expected (1, 2)"
     )
     assert message_of(expect_equal, np.zeros(2), np.zeros(3), what="a").startswith("a gave array(")
+
+
+SLIPS = {"that is the radius: the diameter is twice it": 0.5,
+         "that is in millimetres: the check wants metres": 1000.0,
+         "that is the radius again": 0.5}
+
+
+def near(got: float, wrong: float) -> bool:
+    return abs(got - wrong) <= 1e-9
+
+
+def test_expect_no_slip_names_the_first_slip_the_answer_is():
+    with pytest.raises(NotYet) as caught:
+        expect_no_slip(0.5, SLIPS, near, prefix="0.5 m: ", suffix=" (1 m expected)")
+    assert str(caught.value) == ("0.5 m: that is the radius: the diameter is twice it "
+                                 "(1 m expected)")
+    with pytest.raises(NotYet, match="^that is in millimetres: the check wants metres$"):
+        expect_no_slip(1000.0, SLIPS, near)
+
+
+def test_expect_no_slip_is_silent_for_an_answer_that_is_no_known_slip():
+    expect_no_slip(0.7, SLIPS, near)  # the check goes on to its own message
+    expect_no_slip(1.0, {}, near)
+
+
+def test_expect_no_slip_hands_the_answer_and_each_wrong_answer_in_order():
+    seen = []
+    expect_no_slip("answer", {"a": 1, "b": 2}, lambda got, wrong: seen.append((got, wrong)))
+    assert seen == [("answer", 1), ("answer", 2)]
 
 
 def test_format_value_is_short_and_deterministic():

@@ -1,18 +1,26 @@
-"""The command line: demo writes its files and summary; bench prints its table; a user's
-mistake is one ``abcwc: error:`` line and exit status 2, never a traceback."""
+"""The command line: demo writes its files and summary; bench prints its table; every
+command that prints figures prints them as JSON with --json, --out is a folder everywhere,
+progress bars are on unless --quiet; a user's mistake is one ``abcwc: error:`` line and
+exit status 2, never a traceback, and anything else one line calling it a bug (exit 1),
+with the traceback under --debug."""
 
 from __future__ import annotations
 
+import gzip
 import json
+import math
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
+from tests.slam_data import slam_file
 
 from abcwc import bench
-from abcwc.cli import error_line, main
+from abcwc.cli import build_parser, error_line, main
 from abcwc.log import RunLog
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,6 +34,24 @@ def test_demo_writes_plot_animation_and_log(tmp_path, capsys):
         assert (tmp_path / name).stat().st_size > 1000
     log = RunLog.load(tmp_path / "demo_wander.npz")
     assert len(log) == 1000 and log.meta["world"] == "lab"
+
+
+def test_demo_json_gives_the_runs_figures_and_files(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path), "--seconds", "2", "--quiet", "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    log = RunLog.load(tmp_path / "demo_wander.npz")
+    assert figures["seconds"] == pytest.approx(2.0) and figures["world"] == "lab"
+    assert figures["distance_m"] == pytest.approx(log.distance_travelled())
+    assert figures["collisions"] == int(log.collisions[-1])
+    assert sorted(Path(f).name for f in figures["files"]) == [
+        "demo_wander.gif", "demo_wander.npz", "demo_wander.png"]
+
+
+def test_demo_shows_a_progress_bar_unless_quiet(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path / "a"), "--seconds", "1"]) == 0
+    assert "50/50" in capsys.readouterr().err  # 50 steps of 20 ms
+    assert main(["demo", "--out", str(tmp_path / "b"), "--seconds", "1", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
 
 
 def test_demo_refuses_unknown_world(tmp_path, capsys):
@@ -45,10 +71,149 @@ def test_bench_table_and_json(monkeypatch, capsys):
         bench.run_benchmarks(["nope"])
 
 
+def test_bench_shows_its_runs_unless_quiet(monkeypatch, capsys):
+    monkeypatch.setitem(bench.BENCHMARKS, "fake", ("a fake", lambda: {"x": 1.0}, True))
+    assert main(["bench", "fake", "--repeats", "2"]) == 0
+    err = capsys.readouterr().err
+    assert "bench fake" in err and "2/2" in err
+    assert main(["bench", "fake", "--repeats", "2", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_version_is_the_packages():
+    version = re.search(r'^version = "(.+)"$', (ROOT / "pyproject.toml").read_text(), re.M)
+    done = run_abcwc("--version", cwd=ROOT)
+    assert done.returncode == 0 and done.stdout == f"abcwc {version[1]}\n"
+
+
+def test_every_command_takes_quiet_and_debug_and_the_figures_ones_json():
+    minimal = {"demo": [], "bench": [], "course build": [], "posegraph": ["g.g2o"],
+               "slam": ["log.clf"], "navtrial": []}
+    parser = build_parser()
+    for command, needed in minimal.items():
+        args = parser.parse_args([*command.split(), *needed, "--quiet", "--debug"])
+        assert args.quiet and args.debug, command
+        assert not parser.parse_args([*command.split(), *needed]).quiet, command
+        if command != "course build":
+            assert parser.parse_args([*command.split(), *needed, "--json"]).json, command
+    # before the command too
+    assert parser.parse_args(["--quiet", "--debug", "demo"]).debug
+
+
+def test_posegraph_out_is_a_folder_with_the_optimised_graph(tmp_path, capsys):
+    from abcwc.mapping.g2o import read_g2o, write_g2o
+    from abcwc.mapping.grid_graph import grid_world
+    from abcwc.mapping.posegraph import optimise
+
+    graph = grid_world(200, seed=3, loops_per_pose=1).graph
+    source = write_g2o(graph, tmp_path / "city.g2o")
+    assert main(["posegraph", str(source), "--out", str(tmp_path / "out"), "--json",
+                 "--quiet"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    poses, result = optimise(read_g2o(source))  # the same solve, run here
+    written = tmp_path / "out" / "optimised.g2o"
+    assert figures["files"] == [str(written)]
+    np.testing.assert_allclose(read_g2o(written).poses, poses, atol=1e-9)
+    assert figures["chi2_final"] == pytest.approx(result.chi2_final)
+    assert figures["iterations"] == result.iterations and figures["poses"] == 200
+    assert main(["posegraph", str(source), "--out", str(source)]) == 2  # a file, not a folder
+    assert "names a folder" in capsys.readouterr().err
+
+
+def test_slam_json_gives_the_runs_figures_and_its_relation_errors(tmp_path, capsys):
+    from abcwc.mapping.carmen import read_carmen_log
+    from abcwc.mapping.relations import read_relations, relation_errors
+    from abcwc.mapping.slam import run_slam
+
+    lines = gzip.open(slam_file("aces.clf.gz"), "rt").read().splitlines()
+    scans = [k for k, line in enumerate(lines) if line.startswith("FLASER")]
+    log_path = tmp_path / "aces_start.clf"
+    log_path.write_text("\n".join(lines[:scans[200]]) + "\n")  # the first 200 scans
+    log = read_carmen_log(log_path)
+    last = log.stamps[-1]
+    relations_path = tmp_path / "aces_start.relations"
+    relations_path.write_text("".join(
+        line + "\n" for line in slam_file("aces.relations").read_text().splitlines()
+        if float(line.split()[1]) <= last))
+    assert main(["slam", str(log_path), "--relations", str(relations_path), "--out",
+                 str(tmp_path / "out"), "--json", "--quiet"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    result = run_slam(log)  # the same run, here
+    errors = relation_errors(result.laser_poses, read_relations(relations_path, log.stamps))
+    assert figures["scans"] == 200 and figures["keyframes"] == len(result.keyframes)
+    assert figures["relation_errors"]["relations"] == len(errors.translational) > 0
+    assert figures["relation_errors"]["translational_mean_m"] == pytest.approx(
+        errors.translational_mean)
+    assert figures["relation_errors"]["rotational_mean_deg"] == pytest.approx(
+        errors.rotational_mean_deg)
+    for name in ("map.yaml", "map.pgm", "trajectory.txt"):
+        assert str(tmp_path / "out" / name) in figures["files"]
+        assert (tmp_path / "out" / name).is_file()
+
+
+def test_navtrial_json_has_the_trials_figures(monkeypatch, capsys):
+    from abcwc.experiments import navigation_trial
+    from abcwc.types import Pose2D
+
+    outcome = navigation_trial.GoalOutcome(
+        Pose2D(1.0, 2.0, 0.5), "failed", "blocked", 12.5, 3.0, 2.5, 2.75, 0.4, 0.1, 1, 2,
+        math.inf, 0.05, 0.25, {"driving": 12.5})
+    trial = navigation_trial.TrialResult([outcome], tolerance=0.25)
+    monkeypatch.setattr(navigation_trial, "run_trial", lambda **options: trial)
+    assert main(["navtrial", "--goals", "1", "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    assert figures["goals"] == 1 and figures["success_rate"] == 0.0
+    assert figures["collisions"] == 1 and figures["lethal_periods"] == 2
+    assert figures["closest_person"] is None  # no one met: infinity, which JSON lacks
+    goal = figures["outcomes"][0]
+    assert goal["goal"] == [1.0, 2.0, 0.5] and goal["reason"] == "blocked"
+    assert goal["reached"] is False and goal["driven"] == 3.0
+    assert goal["phases"] == {"driving": 12.5}
+
+
+def test_an_unexpected_error_is_one_line_calling_it_a_bug(monkeypatch, capsys):
+    def broken(*_, **__):
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr(bench, "run_benchmarks", broken)
+    assert main(["bench"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(
+        "abcwc: internal error: ZeroDivisionError: float division by zero")
+    assert "a bug in abcwc" in err and "--debug" in err
+    with pytest.raises(ZeroDivisionError):  # --debug: the traceback, after or before
+        main(["bench", "--debug"])
+    with pytest.raises(ZeroDivisionError):
+        main(["--debug", "bench"])
+
+
+def test_debug_shows_a_user_errors_traceback_too():
+    with pytest.raises(ValueError, match="unknown benchmark"):
+        main(["bench", "nope", "--debug"])
+
+
+def test_an_out_that_is_a_file_is_refused_before_the_run(tmp_path):
+    (tmp_path / "taken").write_text("a file")
+    done = run_abcwc("demo", "--out", "taken", cwd=tmp_path)
+    assert done.returncode == 2
+    assert done.stderr == ("abcwc: error: --out taken: a file is there; --out names a "
+                           "folder\n")
+
+
+def test_a_refused_demo_leaves_no_folder_behind(tmp_path):
+    for refused in (["--seconds", "-5"], ["--seconds", "nan"], ["--world", "moon"],
+                    ["--seed", "-1"]):
+        done = run_abcwc("demo", *refused, cwd=tmp_path)
+        assert done.returncode == 2, done.stderr
+        assert list(tmp_path.iterdir()) == [], refused  # not even abcwc-demo/
+
+
 def test_course_build_runs_in_a_checkout(monkeypatch, capsys):
     monkeypatch.chdir(ROOT)
     assert main(["course", "build", "--check"]) == 0
     assert capsys.readouterr().out.startswith("course/ is up to date")
+    assert main(["course", "build", "--check", "--quiet"]) == 0
+    assert capsys.readouterr().out == ""
 
 
 def test_error_line_is_one_line_and_names_the_file():

@@ -10,9 +10,9 @@ from abcwc.behaviours.base import Status
 from abcwc.behaviours.follow import FollowSettings, TagFollower
 from abcwc.estimation.gyro import GyroOdometry
 from abcwc.experiments.follow_trial import run_follow_trial
+from abcwc.geometry import compose
 from abcwc.paths import data_dir
 from abcwc.sim import SimBase
-from abcwc.sim.sensors import sensor_pose
 from abcwc.sim.world import world_from_dict
 
 
@@ -74,7 +74,7 @@ def test_the_chair_closes_to_a_metre_from_a_standing_person_and_stops():
                            chair.params)
     chair.run(follower, 12.0)
     tag = chair.walkers[0].tag_target()
-    origin, _ = sensor_pose(chair.pose, chair.params.depth_scan.mount)
+    origin = compose(chair.pose, chair.params.depth_scan.mount)[:2]
     assert math.hypot(tag.centre[0] - origin[0], tag.centre[1] - origin[1]) == pytest.approx(
         1.0, abs=0.1)
     assert follower.state == "following"

@@ -1,11 +1,13 @@
 """abcwc.geometry against closed forms: homogeneous 3x3 matrices and hand cases."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from abcwc.geometry import (
+    chain_poses,
     compose,
     encoder_ticks_to_wheel_distance,
     inverse,
@@ -53,6 +55,41 @@ def test_wrap_angle_is_half_open_for_scalars_and_arrays():
     assert wrapped[0] == math.pi and wrapped[2] == math.pi
 
 
+def test_wrap_angle_removes_whole_turns_only_and_both_paths_agree_bit_for_bit():
+    rng = np.random.default_rng(7)
+    angles = np.concatenate([rng.uniform(-1000.0, 1000.0, 5000),
+                             np.arange(-7, 8) * math.pi,  # the odd multiples land on the edge
+                             [0.0, -0.0, 1e-300, -1e-300, math.pi, -math.pi]])
+    wrapped = wrap_angle(angles)
+    assert np.all((wrapped > -math.pi) & (wrapped <= math.pi))
+    turns = (angles - wrapped) / (2 * math.pi)
+    np.testing.assert_allclose(turns, np.round(turns), atol=1e-9)
+    one_by_one = np.array([wrap_angle(float(a)) for a in angles])
+    np.testing.assert_array_equal(wrapped, one_by_one)
+    assert wrap_angle(np.float64(-math.pi)) == math.pi
+    assert wrap_angle(-4) == pytest.approx(2 * math.pi - 4)
+    assert wrap_angle(np.array([-3, 4])).dtype == float  # integer headings too
+    assert math.isnan(wrap_angle(math.nan))
+
+
+def test_the_package_wraps_angles_only_through_wrap_angle():
+    """math.remainder gives [-pi, pi] and np.remainder [-pi, pi): the one wrap is
+    geometry.wrap_angle's (-pi, pi]."""
+    package = Path(__file__).resolve().parent.parent / "abcwc"
+    found = [f"{path.relative_to(package)}:{number}"
+             for path in sorted(package.rglob("*.py")) if path.name != "geometry.py"
+             for number, line in enumerate(path.read_text().splitlines(), 1)
+             if "remainder(" in line]
+    assert not found, found
+
+
+def test_a_landmark_straight_behind_is_at_plus_pi():
+    from abcwc.estimation.range_bearing import range_bearing
+
+    z, _ = range_bearing(np.array([0.0, 0.0, math.pi]), (1.0, 0.0), (0.0, 0.0, 0.0))
+    assert z[0] == 1.0 and z[1] == math.pi
+
+
 def test_compose_inverse_relative_match_homogeneous_matrices():
     a, b = random_poses(50, 1), random_poses(50, 2)
     for pa, pb, got_c, got_r, got_i in zip(a, b, compose(a, b), relative(a, b), inverse(a)):
@@ -69,6 +106,32 @@ def test_single_poses_answer_with_pose2d_and_arrays_with_arrays():
     assert isinstance(compose((0, 0, 0), (1, 0, 0)), np.ndarray)
     # a quarter turn then one metre forward ends one metre to the left
     same_pose(compose(Pose2D(0, 0, math.pi / 2), Pose2D(1, 0, 0)).as_array(), [0, 1, math.pi / 2])
+
+
+def test_chain_poses_composes_relative_poses_in_turn():
+    rng = np.random.default_rng(2)
+    steps = rng.normal(0, 1, (30, 3))
+    poses = [np.array([1.0, -2.0, 3.0])]
+    for step in steps:  # one matrix product per step: the independent reference
+        poses.append(pose_of(matrix(poses[-1]) @ matrix(step)))
+    chained = chain_poses(Pose2D(1.0, -2.0, 3.0), steps)
+    assert chained.shape == (31, 3)
+    for got, expected in zip(chained, poses):
+        same_pose(got, expected)
+    assert np.all(np.abs(chained[:, 2]) <= math.pi)
+    np.testing.assert_array_equal(chain_poses((0, 0, 0), np.zeros((0, 3))), [[0, 0, 0]])
+
+
+def test_a_pose_graphs_odometry_chain_is_chain_poses_over_its_forward_edges():
+    from abcwc.mapping.g2o import chain_odometry
+
+    rng = np.random.default_rng(5)
+    steps = rng.normal(0, 1, (8, 3))
+    # edges in file order: a loop closure 0 -> 5 first, then the odometry i -> i + 1
+    edges = np.array([(0, 5), *[(k, k + 1) for k in range(8)]])
+    measurements = np.vstack([[9.0, 9.0, 1.0], steps])
+    np.testing.assert_array_equal(chain_odometry(np.arange(9), edges, measurements),
+                                  chain_poses((0.0, 0.0, 0.0), steps))
 
 
 def test_point_transforms_round_trip_and_match_matrices():

@@ -106,11 +106,11 @@ def test_gyro_odometry_refuses_bad_settings_and_counts():
     with pytest.raises(ValueError, match="bias"):
         GyroOdometry(bias=math.nan)
     with pytest.raises(ValueError, match="start must be a Pose2D"):
-        GyroOdometry(start=Pose2D(0.0, 0.0, math.nan))
+        GyroOdometry(start=(0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="ticks_right"):
         GyroOdometry().update(0.0, 0, math.nan, 0.0)
     with pytest.raises(ValueError, match="pose must be a Pose2D"):
-        gyro_odometry_step(Pose2D(math.nan, 0.0, 0.0), 0.01, 0.01, 0.1, 0.02)
+        gyro_odometry_step((0.0, 0.0, 0.0), 0.01, 0.01, 0.1, 0.02)
     with pytest.raises(ValueError, match="theta0"):
         integrate_gyro_heading(np.arange(3.0), np.zeros(3), theta0=math.nan)
 

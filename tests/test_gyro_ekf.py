@@ -142,10 +142,10 @@ def test_bad_filter_inputs_are_refused():
     with pytest.raises(ValueError, match="wheel_base"):
         ChairEkf(Pose2D(), wheel_base=-0.44)
     with pytest.raises(ValueError, match="start must be a Pose2D"):
-        ChairEkf(Pose2D(math.nan, 0.0, 0.0))
+        ChairEkf((0.0, 0.0, 0.0))
     ekf = ChairEkf(Pose2D())
     with pytest.raises(ValueError, match="pose must be a Pose2D"):
-        ekf.update_pose(Pose2D(0.0, 0.0, math.nan), np.eye(3))
+        ekf.update_pose((0.0, 0.0, 0.0), np.eye(3))
     with pytest.raises(ValueError, match="gyro_z"):
         ekf.update_gyro(math.nan)
     with pytest.raises(ValueError, match="wheel travel"):

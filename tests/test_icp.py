@@ -11,16 +11,14 @@ import math
 import numpy as np
 import pytest
 
-from abcwc.geometry import compose, inverse_transform_points, relative
+from abcwc.geometry import chain_poses, inverse_transform_points, relative
 from abcwc.mapping.carmen import read_carmen_log
 from abcwc.mapping.icp import (
     TooFewPairsError,
-    chain,
     icp,
     line_normals,
     match_consecutive_scans,
     match_scans,
-    scan_points,
 )
 from abcwc.mapping.relations import read_relations, relation_errors, relative_pose_errors
 from abcwc.mapping.slam_data import LOG_FACTS, slam_file
@@ -133,7 +131,7 @@ def test_match_scans_takes_laser_scans():
 
     true_pose = (0.1, 0.05, 0.08)
     reference, current = scan_from((0, 0, 0)), scan_from(true_pose)
-    assert len(scan_points(reference)) == 181  # every beam hits a wall
+    assert len(reference.points()) == 181  # every beam hits a wall
     result = match_scans(reference, current, (0.0, 0.0, 0.0))
     np.testing.assert_allclose(result.pose, true_pose, atol=0.02)  # beams quantise angles
 
@@ -158,7 +156,7 @@ def test_aces_consecutive_matches_beat_odometry_on_nearby_relations(aces):
     estimated = []
     for first, second in zip(relations.first, relations.second):
         deltas = match_consecutive_scans(log, int(first), int(second))
-        estimated.append(chain(np.zeros(3), deltas)[-1])
+        estimated.append(chain_poses(np.zeros(3), deltas)[-1])
     matched = relative_pose_errors(np.array(estimated), relations.reference)
     odometry = relation_errors(log.odometry, relations)
     assert matched.rotational_mean_deg < 0.6 * odometry.rotational_mean_deg
@@ -173,12 +171,3 @@ def test_aces_consecutive_match_is_fit_and_consistent(aces):
     assert result.converged and result.fitness > 0.75 and result.rms < 0.05
     assert np.all(np.linalg.eigvalsh(result.covariance) > 0)
     np.testing.assert_allclose(match_consecutive_scans(log, 1000, 1001)[0], result.pose)
-
-
-def test_chain_composes_relative_poses_in_turn():
-    rng = np.random.default_rng(2)
-    deltas = rng.normal(0, 1, (30, 3))
-    poses = [np.array([1.0, -2.0, 3.0])]
-    for delta in deltas:
-        poses.append(compose(poses[-1], delta))
-    np.testing.assert_allclose(chain(poses[0], deltas), poses, atol=1e-12)

@@ -11,6 +11,7 @@ import pytest
 from abcwc.behaviours.base import Status
 from abcwc.behaviours.find_sign import SignSeeker
 from abcwc.experiments.sign_sweep import sweep_sign_views
+from abcwc.geometry import compose
 from abcwc.navigation.navigator import Navigator
 from abcwc.perception.known_objects import (
     KnownObject,
@@ -21,7 +22,6 @@ from abcwc.perception.known_objects import (
 )
 from abcwc.perception.signs import SIGN_SIZE, WORD_BOX, house_sign
 from abcwc.sim.base import SimBase
-from abcwc.sim.sensors import sensor_pose
 from abcwc.sim.world import WorldError, load_world, world_from_dict
 from abcwc.types import Pose2D
 
@@ -174,7 +174,8 @@ def run_seeker(start, vantage=(), seconds=90.0):
     while seeker.running and chair.t < seconds:
         chair.send(seeker(frame))
         frame = chair.step()
-    origin, heading = sensor_pose(chair.pose, chair.params.depth_scan.mount)
+    sensor = compose(chair.pose, chair.params.depth_scan.mount)  # x, y, heading in the world
+    origin, heading = sensor[:2], sensor[2]
     sign = chair.world.signs[0].centre
     left = math.remainder(math.atan2(sign[1] - origin[1], sign[0] - origin[0]) - heading,
                           math.tau)

@@ -138,9 +138,8 @@ def test_a_person_beside_the_chair_hides_the_walls_but_does_not_make_it_lost():
     assert not localizer.lost  # but none reached through a wall
     truth = chair.pose
     from abcwc.geometry import transform_points
-    from abcwc.mapping.icp import scan_points
 
-    points = transform_points(localizer.mount, scan_points(chair.read().lidar))
+    points = transform_points(localizer.mount, chair.read().lidar.points())
     here = np.array([truth.x, truth.y, truth.theta])
     assert localizer.see_through_fraction(points, here) < localizer.see_through
     away = here + (0.0, 1.2, 0.0)  # 1.2 m north: across the corridor's wall

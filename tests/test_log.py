@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from abcwc.log import CHANNELS, FORMAT_VERSION, LogRecorder, RunLog
+from abcwc.log import CHANNELS, FORMAT_VERSION, LogFileError, LogRecorder, RunLog
 from abcwc.params import load_params
 from abcwc.sim import SimBase
 from abcwc.types import LaserScan, PotCommand, Twist, make_frame
@@ -41,7 +42,56 @@ def test_loading_a_log_of_another_format_is_refused(tmp_path):
     log.meta["format_version"] = 99
     path = tmp_path / "x.npz"
     np.savez(path, meta=np.array('{"format_version": 99}'), t=log.t)
-    with pytest.raises(ValueError, match="format 99"):
+    with pytest.raises(LogFileError, match=f"^{re.escape(str(path))}: log format 99"):
+        RunLog.load(path)
+
+
+def test_loading_a_missing_file_names_it(tmp_path):
+    missing = tmp_path / "nowhere.npz"
+    with pytest.raises(FileNotFoundError, match=f"^{re.escape(str(missing))}: no such file"):
+        RunLog.load(missing)
+    with pytest.raises(IsADirectoryError, match="a folder, not a RunLog file"):
+        RunLog.load(tmp_path)
+
+
+def _text(path: Path) -> None:
+    path.write_text("t,x\n0.0,1.0\n")
+
+
+def _empty(path: Path) -> None:
+    path.write_bytes(b"")
+
+
+def _broken_zip(path: Path) -> None:
+    path.write_bytes(b"PK\x03\x04 and then nothing a zip file holds")
+
+
+@pytest.mark.parametrize("write", [_text, _empty, _broken_zip])
+def test_loading_a_file_that_is_not_an_npz_names_it(tmp_path, write):
+    path = tmp_path / "drive.npz"
+    write(path)
+    with pytest.raises(LogFileError, match=f"^{re.escape(str(path))}: not an .npz file"):
+        RunLog.load(path)
+
+
+def test_loading_an_npy_array_names_it(tmp_path):
+    path = tmp_path / "poses.npy"
+    np.save(path, np.zeros((3, 3)))
+    with pytest.raises(LogFileError, match=f"^{re.escape(str(path))}: a single NumPy array"):
+        RunLog.load(path)
+
+
+@pytest.mark.parametrize("arrays, problem", [
+    ({"poses": np.zeros((3, 3)), "stamps": np.arange(3.0)},
+     "an .npz without a RunLog's 'meta' \\(it holds poses, stamps\\)"),
+    ({"meta": np.array("not json")}, "its 'meta' is not a RunLog's"),
+    ({"meta": np.array("{}"), "format_version": np.array(2), "channels/x": np.arange(3.0)},
+     "not a RunLog of format 2 .*time channel 't'"),
+], ids=["other arrays", "meta not json", "no time channel"])
+def test_loading_an_npz_that_is_not_a_runlog_names_it(tmp_path, arrays, problem):
+    path = tmp_path / "other.npz"
+    np.savez(path, **arrays)
+    with pytest.raises(LogFileError, match=f"^{re.escape(str(path))}: {problem}"):
         RunLog.load(path)
 
 

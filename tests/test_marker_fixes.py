@@ -10,9 +10,9 @@ import pytest
 from abcwc.estimation.ekf import ChairEkf, nees_band, run_ekf
 from abcwc.estimation.range_bearing import range_bearing
 from abcwc.experiments.nees import calibrate_worn_chair, ekf_monte_carlo
+from abcwc.geometry import compose
 from abcwc.perception.markers import FixedMarker, MarkerSighting, sight_markers
 from abcwc.sim.base import SimBase
-from abcwc.sim.sensors import sensor_pose
 from abcwc.sim.world import WorldError, world_from_dict
 from abcwc.types import Pose2D, Twist
 
@@ -71,7 +71,8 @@ def test_the_camera_reads_the_floors_markers_within_the_noise_it_claims():
     for x, heading in ((5.0, math.pi), (3.5, math.pi), (34.0, 0.0), (30.0, 0.0)):
         chair = SimBase("floor", seed=3, camera="gray", people=False,
                         start=Pose2D(x, 9.0, heading))
-        origin, facing = sensor_pose(chair.pose, mount)
+        sensor = compose(chair.pose, mount)  # x, y, heading in the world
+        origin, facing = sensor[:2], sensor[2]
         for seen in sight_markers(chair.render_camera(), markers):
             centre = markers[seen.marker_id].centre
             true_range = math.hypot(centre[0] - origin[0], centre[1] - origin[1])

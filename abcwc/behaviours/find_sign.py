@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 
 from abcwc.behaviours.base import BehaviourBase, positive_number
+from abcwc.geometry import wrap_angle
 from abcwc.perception.known_objects import Detection, ObjectDetector
 from abcwc.types import CAMERA_FRAME, CameraImage, SensorFrame, Twist
 
@@ -69,8 +70,7 @@ class SignSeeker(BehaviourBase):
     @property
     def bearing(self) -> float | None:
         """rad (left positive) from the chair's heading now to the sign, as last seen."""
-        return None if self._sign is None else math.remainder(self._sign - self.heading,
-                                                             math.tau)
+        return None if self._sign is None else wrap_angle(self._sign - self.heading)
 
     def observe(self, frame: SensorFrame) -> None:
         if self._gyro_t is not None and math.isfinite(frame.gyro_z):

@@ -81,7 +81,6 @@ from abcwc.behaviours.landmark import PoseEstimator
 from abcwc.control.safety import ClearanceCheck
 from abcwc.control.velocity import pot_command_to_twist
 from abcwc.geometry import compose, transform_points, wrap_angle
-from abcwc.mapping.icp import scan_points
 from abcwc.navigation.costmap import FREE_SPACE, Costmap, chair_footprint
 from abcwc.navigation.dwa import DwaPlanner
 from abcwc.navigation.people import PeopleTracker
@@ -271,7 +270,7 @@ class TagFollower(BehaviourBase):
         None if there is no compact blob there."""
         s = self.settings
         sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
-        points = transform_points(sensor, scan_points(scan))
+        points = transform_points(sensor, scan.points())
         near = points[np.hypot(*(points - self.track).T) <= s.gate]
         if len(near) < 3 or np.ptp(near, axis=0).max() > s.max_extent:
             return None
@@ -354,12 +353,10 @@ class TagFollower(BehaviourBase):
         if self.track is not None and self._updated >= frame.t - s.lost_after:
             # the person followed is a moving disc, not a wall: their returns leave the map
             sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
-            ranges = np.array(scan.ranges, dtype=float)
-            finite = np.where(np.isfinite(ranges), ranges, 0.0)
-            ends = transform_points(sensor, np.column_stack([finite * np.cos(scan.angles),
-                                                             finite * np.sin(scan.angles)]))
-            theirs = np.isfinite(ranges) & (np.hypot(*(ends - self.track).T) <= s.gate)
-            scan = replace(scan, ranges=np.where(theirs, np.nan, ranges))
+            theirs = scan.hits()
+            ends = transform_points(sensor, scan.points())
+            theirs[theirs] = np.hypot(*(ends - self.track).T) <= s.gate
+            scan = replace(scan, ranges=np.where(theirs, np.nan, scan.ranges))
         local = Costmap.rolling_window(Pose2D(), s.local_size, 0.05, default=FREE_SPACE)
         local.add_scan(scan, self.params.lidar.mount, obstacle_range=s.local_size / 2,
                        raytrace_range=s.local_size / 2)

@@ -25,7 +25,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_close, expect_no_slip, format_value
 from abcwc.params import ChairParams, default_params
 from abcwc.types import Pose2D, SensorFrame, SimTruth, make_frame
 
@@ -180,9 +180,8 @@ def counts_measurement_check(measured: Callable[[object], float], log: object) -
             expected / (math.pi * p.drive_wheel_diameter),
         "that is metres per count, upside down": 1 / expected,
     }
-    for slip, wrong in slips.items():
-        if abs(value - wrong) <= 0.002 * abs(wrong):
-            raise NotYet(f"{value:.6g}: {slip}")
+    expect_no_slip(value, slips, lambda got, wrong: abs(got - wrong) <= 0.002 * abs(wrong),
+                   prefix=f"{value:.6g}: ")
     raise NotYet(f"you measured {value:.1f}; the drive's mean count over its "
                  f"{turns:.2f} wheel turns gives {expected:.1f}")
 

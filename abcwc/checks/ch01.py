@@ -26,7 +26,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_equal, format_value, numbers
+from abcwc.checks.report import (
+    NotYet,
+    checker,
+    expect,
+    expect_equal,
+    expect_no_slip,
+    format_value,
+    numbers,
+)
 from abcwc.control import direction_pot_command, joystick_to_pot_byte
 from abcwc.control.pots import pot_byte_to_deflection
 from abcwc.control.safety import ComfortLimits
@@ -306,10 +314,9 @@ def clockwise_prediction_check(predicted: Callable[[], float], measured: float) 
             straights,
         "only the corners: the 3.5 straights curve left as well": corners,
     }
-    for slip, wrong in slips.items():
-        if abs(value - wrong) <= 1.5:
-            raise NotYet(f"you predicted {value:+.1f} deg, the run measured "
-                         f"{measured:+.1f} deg: {slip}")
+    expect_no_slip(value, slips, lambda got, wrong: abs(got - wrong) <= 1.5,
+                   prefix=f"you predicted {value:+.1f} deg, the run measured "
+                          f"{measured:+.1f} deg: ")
     raise NotYet(f"you predicted {value:+.1f} deg; the run measured {measured:+.1f} deg. "
                  f"Budget it as section 5 did: 3.5 straights of {budget['straight']:+.2f} "
                  f"deg each, and 3 corners each {budget['corner_short']:.2f} deg short")

@@ -27,6 +27,7 @@ from abcwc.checks.report import (
     expect,
     expect_close,
     expect_equal,
+    expect_no_slip,
     format_value,
 )
 from abcwc.control.pots import turn_value
@@ -138,10 +139,8 @@ def coast_prediction_check(predicted: Callable[[], float], measured: float,
         "half of it: the response is an exponential, not a straight ramp, and its area "
         "behind the step is v tau, not v tau / 2": speed * (dead_time + tau / 2),
     }
-    for slip, wrong in slips.items():
-        if abs(value - wrong) <= 0.02:
-            raise NotYet(f"you predicted {value:.2f} m, the chair rolled {measured:.3f} m: "
-                         f"{slip}")
+    expect_no_slip(value, slips, lambda got, wrong: abs(got - wrong) <= 0.02,
+                   prefix=f"you predicted {value:.2f} m, the chair rolled {measured:.3f} m: ")
     raise NotYet(f"you predicted {value:.2f} m, the chair rolled {measured:.3f} m: at "
                  f"{speed:g} m/s the wheels run on through the dead time and then slow with "
                  "the lag; add up the distance each part covers")
@@ -172,9 +171,8 @@ def t63_check(measured: Callable[[np.ndarray, np.ndarray], float], t: np.ndarray
         "that is when the step was sent on the log's own clock (t0 = 0.5 s): measure from "
         "the command": expected + 0.5,
     }
-    for slip, wrong in slips.items():
-        if abs(value - wrong) <= 0.02:
-            raise NotYet(f"{value:.3f} s: {slip} (the response reaches 63.2 % at "
-                         f"{expected:.3f} s)")
+    expect_no_slip(value, slips, lambda got, wrong: abs(got - wrong) <= 0.02,
+                   prefix=f"{value:.3f} s: ",
+                   suffix=f" (the response reaches 63.2 % at {expected:.3f} s)")
     raise NotYet(f"{value:.3f} s; the response reaches 63.2 % of its final "
                  f"{final:.3f} m/s at {expected:.3f} s after the command")

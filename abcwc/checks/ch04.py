@@ -28,7 +28,15 @@ from functools import lru_cache
 import numpy as np
 from scipy.special import logsumexp
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value, numbers
+from abcwc.checks.report import (
+    NotYet,
+    checker,
+    expect,
+    expect_no_slip,
+    expect_own,
+    format_value,
+    numbers,
+)
 from abcwc.perception.speech.recognizer import word_log_likelihood_ratio
 
 __all__ = [
@@ -95,6 +103,10 @@ def _slips(scores: np.ndarray, aligned: np.ndarray) -> dict[str, float]:
     }
 
 
+def _same_ratio(got: float, wrong: float) -> bool:
+    return abs(got - wrong) <= 1e-9 * max(1.0, abs(wrong))
+
+
 @checker("word ratio")
 def word_ratio_check(fn: Callable) -> str:
     """``fn(scores, aligned)`` against the ratio and the slips."""
@@ -108,9 +120,8 @@ def word_ratio_check(fn: Callable) -> str:
         if abs(float(got) - expected) <= 1e-9 * max(1.0, abs(expected)):
             continue
         where = f"a word of {len(aligned)} frames among {scores.shape[1]} states"
-        for slip, wrong in _slips(scores, aligned).items():
-            if abs(float(got) - wrong) <= 1e-9 * max(1.0, abs(wrong)):
-                raise NotYet(f"{where}: {float(got):.3f}, expected {expected:.3f}: {slip}")
+        expect_no_slip(float(got), _slips(scores, aligned), _same_ratio,
+                       prefix=f"{where}: {float(got):.3f}, expected {expected:.3f}: ")
         raise NotYet(f"{where} gave {float(got):.3f}, expected {expected:.3f} per frame")
     return f"{len(cases)} words, each one's ratio per frame right"
 

@@ -26,7 +26,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_no_slip, expect_own, format_value
 from abcwc.params import default_params
 from abcwc.perception.known_objects import ratio_test
 
@@ -105,6 +105,10 @@ def match_check(fn: Callable) -> str:
     return f"{len(match_cases())} sets of neighbours, {kept_total} matches kept as Lowe keeps them"
 
 
+def _same_matches(got: list, wrong: list) -> bool:
+    return len(got) == len(wrong) and all(a is b for a, b in zip(got, wrong))
+
+
 def _explain_matches(pairs, ratio, got, expected) -> None:
     full = [p for p in pairs if len(p) == 2]
     slips = {
@@ -118,9 +122,7 @@ def _explain_matches(pairs, ratio, got, expected) -> None:
         f"that compares distances with the fixed number {ratio}; Lowe compares the two "
         "neighbours with each other": [m for m, _ in full if m.distance < ratio],
     }
-    for slip, wrong in slips.items():
-        if len(got) == len(wrong) and all(a is b for a, b in zip(got, wrong)):
-            raise NotYet(slip)
+    expect_no_slip(got, slips, _same_matches)
     if any(not hasattr(m, "distance") for m in got):
         raise NotYet(f"good_matches gave {format_value(got[:3])}...; return the match "
                      "objects themselves, not their distances or indices")
@@ -159,10 +161,10 @@ def range_check(predicted: Callable[[], float], measured: float) -> str:
              "fx = (640 / 2) / tan(57 / 2 deg)": math.tan(fov / 2) / math.tan(fov),
              "fx came out twice too long: it is half the image's width, 320 px, over "
              "tan(half the field)": 2.0}
-    for slip, factor in slips.items():
-        if near * factor * 0.9 <= value <= far * factor * 1.1:
-            raise NotYet(f"you predicted {value:.1f} m: {slip} ({near:.1f}-{far:.1f} m; "
-                         f"the sweep: {measured:.1f} m)")
+    expect_no_slip(value, slips,
+                   lambda got, factor: near * factor * 0.9 <= got <= far * factor * 1.1,
+                   prefix=f"you predicted {value:.1f} m: ",
+                   suffix=f" ({near:.1f}-{far:.1f} m; the sweep: {measured:.1f} m)")
     raise NotYet(f"you predicted {value:.1f} m; the sign spans fx 0.6 / d px and SIFT "
                  f"needs {PX_ACROSS[0]:.0f}-{PX_ACROSS[1]:.0f}: {near:.1f}-{far:.1f} m (the "
                  f"sweep found it to {measured:.1f} m)")

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_close, expect_no_slip, format_value
 from abcwc.estimation import odometry
 from abcwc.geometry import wrap_angle
 from abcwc.params import default_params
@@ -134,6 +134,8 @@ def _as_pose(got: Any, what: str) -> Pose2D:
         x, y, theta = (float(v) for v in values)
     except (TypeError, ValueError):
         raise NotYet(f"{what} gave {format_value(got)}, expected a Pose2D(x, y, theta)") from None
+    expect(all(map(math.isfinite, (x, y, theta))),
+           f"{what} gave ({x:g}, {y:g}, {theta:g}); a pose is three finite numbers")
     return Pose2D(x, y, theta)
 
 
@@ -318,10 +320,8 @@ def euler_prediction_check(predicted: Callable[[], float], measured: float,
         "square, but there are 25 times fewer steps": at_20_ms * 25**2,
         "that is the percentage as a fraction: the check wants percent": at_20_ms * 25 / 100,
     }
-    for slip, wrong in slips.items():
-        if abs(value - wrong) <= 0.15 * wrong:
-            raise NotYet(f"you predicted {value:.3f} %, euler ended {measured:.3f} % off: "
-                         f"{slip}")
+    expect_no_slip(value, slips, lambda got, wrong: abs(got - wrong) <= 0.15 * wrong,
+                   prefix=f"you predicted {value:.3f} %, euler ended {measured:.3f} % off: ")
     raise NotYet(f"you predicted {value:.3f} %, euler ended {measured:.3f} % off. It is "
                  "first order: its end error is in proportion to the period")
 

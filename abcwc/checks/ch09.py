@@ -29,7 +29,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value, numbers
+from abcwc.checks.report import (
+    NotYet,
+    checker,
+    expect,
+    expect_close,
+    expect_no_slip,
+    format_value,
+    numbers,
+)
 from abcwc.estimation.gyro import (
     estimate_gyro_bias,
     gyro_odometry_from_log,
@@ -37,6 +45,7 @@ from abcwc.estimation.gyro import (
     integrate_gyro_heading,
 )
 from abcwc.estimation.odometry import log_wheel_travel
+from abcwc.geometry import wrap_angle
 from abcwc.log import RunLog
 from abcwc.params import default_params
 from abcwc.types import Pose2D, Twist
@@ -153,7 +162,7 @@ def _headings(got: object, n: int, what: str) -> np.ndarray:
 def _wrapped_close(got: np.ndarray, want: np.ndarray, what: str, ref: str,
                    atol: float = 1e-9) -> None:
     """Compare headings modulo 2 pi (wrapped or unwrapped answers both pass)."""
-    diff = np.remainder(got - want + math.pi, 2.0 * math.pi) - math.pi
+    diff = wrap_angle(got - want)
     bad = np.flatnonzero(~(np.abs(diff) <= atol))
     if bad.size:
         k = int(bad[0])
@@ -186,7 +195,7 @@ def heading_check(fn: Callable[..., np.ndarray]) -> str:
     for what, t, gyro, theta0, bias, closed in cases:
         want = reference_integrate_heading(t, gyro, theta0, bias) if closed is None else closed
         got = _headings(fn(t.copy(), gyro.copy(), theta0, bias), t.size, what)
-        expect(abs(math.remainder(got[0] - theta0, 2 * math.pi)) < 1e-12,
+        expect(abs(wrap_angle(got[0] - theta0)) < 1e-12,
                f"{what}: heading[0] gave {got[0]:.6g} rad, expected theta0 = {theta0:g} rad "
                "(the heading at the first timestamp is where we start)")
         if closed is None:
@@ -197,7 +206,7 @@ def heading_check(fn: Callable[..., np.ndarray]) -> str:
 
 
 def _headings_match(a: np.ndarray, b: np.ndarray, atol: float = 1e-9) -> bool:
-    return bool(np.all(np.abs(np.remainder(a - b + math.pi, 2 * math.pi) - math.pi) <= atol))
+    return bool(np.all(np.abs(wrap_angle(a - b)) <= atol))
 
 
 def _hint_rule(got: np.ndarray, want: np.ndarray, t: np.ndarray, gyro: np.ndarray,
@@ -234,13 +243,15 @@ def _as_pose(got: object, what: str) -> Pose2D:
         arr = np.zeros(0)
     expect(arr.shape == (3,), f"{what} gave {format_value(got)}, expected a Pose2D "
            "(or x, y, theta)")
+    expect(bool(np.isfinite(arr).all()), f"{what} gave ({arr[0]:g}, {arr[1]:g}, {arr[2]:g}); "
+           "a pose is three finite numbers")
     return Pose2D(*map(float, arr))
 
 
 def _pose_close(got: Pose2D, want: Pose2D, what: str, atol: float, ref: str) -> None:
     expect_close(got.x, want.x, what=f"{what}: x", rtol=0.0, atol=atol, unit="m", ref=ref)
     expect_close(got.y, want.y, what=f"{what}: y", rtol=0.0, atol=atol, unit="m", ref=ref)
-    dtheta = math.remainder(got.theta - want.theta, 2 * math.pi)
+    dtheta = wrap_angle(got.theta - want.theta)
     expect(abs(dtheta) <= atol,
            f"{what}: theta gave {got.theta:.6g} rad, expected {want.theta:.6g} rad "
            "(modulo 2 pi; theta + (gyro_z - bias) dt)")
@@ -248,7 +259,7 @@ def _pose_close(got: Pose2D, want: Pose2D, what: str, atol: float, ref: str) -> 
 
 def _same(a: Pose2D, b: Pose2D) -> bool:
     return (abs(a.x - b.x) < 1e-12 and abs(a.y - b.y) < 1e-12
-            and abs(math.remainder(a.theta - b.theta, 2 * math.pi)) < 1e-12)
+            and abs(wrap_angle(a.theta - b.theta)) < 1e-12)
 
 
 def _hint_step(got: Pose2D, want: Pose2D, pose: Pose2D, d_left: float, d_right: float,
@@ -259,27 +270,26 @@ def _hint_step(got: Pose2D, want: Pose2D, pose: Pose2D, d_left: float, d_right: 
 
     def moved(heading: float, turn: float) -> Pose2D:
         return Pose2D(pose.x + d_c * math.cos(heading), pose.y + d_c * math.sin(heading),
-                      math.remainder(pose.theta + turn, 2 * math.pi))
+                      wrap_angle(pose.theta + turn))
 
     wheel_phi = (d_right - d_left) / default_params().wheel_base
     raw_phi = gyro_z * dt
-    slips = [
-        (moved(pose.theta + wheel_phi / 2, wheel_phi),
-         "you turned by the wheels, (d_r - d_l) / b (eqn 7); eqn 16 takes the heading "
-         "from the gyro instead"),
-        (moved(pose.theta + raw_phi / 2, raw_phi),
-         "the bias was not subtracted: turn by (gyro_z - bias) dt"),
-        (moved(pose.theta, phi),
-         "you moved along the heading at the start of the step; use the step's mean "
-         "heading theta + phi / 2 (the chord of the arc points that way)"),
-        (moved(pose.theta + phi, phi),
-         "you moved along the heading at the end of the step (as A.11 does); use the "
-         "step's mean heading theta + phi / 2"),
-        (moved(pose.theta + phi / 2, phi * 1000.0),
-         "the heading changed by a thousand times too much: dt is in seconds"),
-    ]
-    for wrong, message in slips:
-        expect(_same(wrong, want) or not _same(got, wrong), f"{what}: {message}")
+    slips = {
+        "you turned by the wheels, (d_r - d_l) / b (eqn 7); eqn 16 takes the heading "
+        "from the gyro instead": moved(pose.theta + wheel_phi / 2, wheel_phi),
+        "the bias was not subtracted: turn by (gyro_z - bias) dt":
+            moved(pose.theta + raw_phi / 2, raw_phi),
+        "you moved along the heading at the start of the step; use the step's mean "
+        "heading theta + phi / 2 (the chord of the arc points that way)":
+            moved(pose.theta, phi),
+        "you moved along the heading at the end of the step (as A.11 does); use the "
+        "step's mean heading theta + phi / 2": moved(pose.theta + phi, phi),
+        "the heading changed by a thousand times too much: dt is in seconds":
+            moved(pose.theta + phi / 2, phi * 1000.0),
+    }
+    # a variant that happens to equal the right answer here names no slip
+    expect_no_slip(got, slips, lambda got, wrong: _same(got, wrong) and not _same(wrong, want),
+                   prefix=f"{what}: ")
 
 
 @checker("one fused odometry step")

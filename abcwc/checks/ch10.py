@@ -30,6 +30,7 @@ from abcwc.checks.report import NotYet, checker, expect, expect_close, format_va
 from abcwc.estimation.ekf import H_GYRO, H_POSE, H_WHEEL, POSE, kalman_update, nees
 from abcwc.estimation.ekf import motion as reference_motion
 from abcwc.estimation.ekf import motion_jacobian as reference_motion_jacobian
+from abcwc.geometry import wrap_angle
 
 __all__ = [
     "band_share_check",
@@ -192,7 +193,7 @@ def nees_check(nees_fn: Callable[[np.ndarray, np.ndarray, np.ndarray], float]) -
                    f"{what}: you used a heading error of {truth[2] - estimate[2]:.2f} rad; "
                    "3.1 and -3.1 rad are 0.08 rad apart: wrap the error to (-pi, pi]")
         e = truth - estimate
-        e[2] = math.remainder(e[2], 2 * math.pi)
+        e[2] = wrap_angle(e[2])
         expect(not (np.ndim(got) == 0 and math.isclose(float(got), e @ p @ e, rel_tol=1e-6)
                     and not math.isclose(e @ p @ e, want, rel_tol=1e-6)),
                f"{what}: you computed e^T P e; the NEES divides by the covariance: "

@@ -23,7 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value, numbers
+from abcwc.checks.report import (
+    NotYet,
+    checker,
+    expect,
+    expect_no_slip,
+    expect_own,
+    format_value,
+    numbers,
+)
 from abcwc.description import homogeneous
 from abcwc.geometry import compose, inverse, wrap_angle
 from abcwc.params import default_params
@@ -85,6 +93,10 @@ def origin_cases() -> list[tuple[np.ndarray, np.ndarray]]:
     return cases
 
 
+def _same_transform(got: np.ndarray, wrong: np.ndarray) -> bool:
+    return np.allclose(got, wrong, atol=1e-9)
+
+
 @checker("joint origin")
 def origin_check(fn: Callable) -> str:
     """``fn(xyz, rpy)`` against the rotations multiplied out here, and the usual slips."""
@@ -115,10 +127,8 @@ def origin_check(fn: Callable) -> str:
                 _origin(xyz, _rz(math.radians(yaw)) @ _ry(math.radians(pitch))
                         @ _rx(math.radians(roll))),
         }
-        for slip, wrong in slips.items():
-            if np.allclose(got, wrong, atol=1e-9):
-                raise NotYet(f"xyz {np.round(xyz, 3).tolist()}, rpy "
-                             f"{np.round(rpy, 3).tolist()}: {slip}")
+        expect_no_slip(got, slips, _same_transform,
+                       prefix=f"xyz {np.round(xyz, 3).tolist()}, rpy {np.round(rpy, 3).tolist()}: ")
         expect(np.allclose(got[3], [0, 0, 0, 1]), "the bottom row of a homogeneous "
                f"transform is 0 0 0 1, got {np.round(got[3], 3).tolist()}")
         raise NotYet(f"xyz {np.round(xyz, 3).tolist()}, rpy {np.round(rpy, 3).tolist()}: "
@@ -174,10 +184,9 @@ def hit_check(predicted: Callable[[], tuple[float, float]]) -> str:
             _hit((mount[0], -mount[1], -mount[2]), (*HIT_CHAIR_POSE[:2], -HIT_CHAIR_POSE[2]),
                  HIT_RANGE),
     }
-    for slip, wrong in slips.items():
-        if np.hypot(*(point - wrong)) <= 0.05:
-            raise NotYet(f"you predicted ({point[0]:.2f}, {point[1]:.2f}), the tree gives "
-                         f"({expected[0]:.2f}, {expected[1]:.2f}): {slip}")
+    expect_no_slip(point, slips, lambda got, wrong: np.hypot(*(got - wrong)) <= 0.05,
+                   prefix=f"you predicted ({point[0]:.2f}, {point[1]:.2f}), the tree gives "
+                          f"({expected[0]:.2f}, {expected[1]:.2f}): ")
     raise NotYet(f"you predicted ({point[0]:.2f}, {point[1]:.2f}), the tree gives "
                  f"({expected[0]:.2f}, {expected[1]:.2f}), {error:.2f} m away: go down the "
                  "chain once more (odom -> base_link -> base_rod -> the ranger -> 0.5 m "

@@ -22,7 +22,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_no_slip, expect_own, format_value
 from abcwc.params import default_params
 from abcwc.perception.depth import depth_image_to_scan
 
@@ -124,9 +124,9 @@ def _explain_ranges(depth, fx, cx, band, low, high, got, expected) -> None:
                 ok &= (values >= low) & (values <= high)
         return np.where(ok, values, np.inf).min(axis=0)
 
-    def same(candidate):
-        return np.array_equal(np.isinf(candidate), np.isinf(got)) and np.allclose(
-            candidate[np.isfinite(got)], got[np.isfinite(got)], atol=1e-9)
+    def same(answer, candidate):
+        return np.array_equal(np.isinf(candidate), np.isinf(answer)) and np.allclose(
+            candidate[np.isfinite(answer)], answer[np.isfinite(answer)], atol=1e-9)
 
     slips = {
         "these are the depths z, not ranges: a pixel off the axis is sqrt(x^2 + z^2) "
@@ -137,9 +137,7 @@ def _explain_ranges(depth, fx, cx, band, low, high, got, expected) -> None:
         "the range limits are not applied: a reading outside [range_min, range_max] is "
         "no reading": nearest(depth[top:top + band] * np.sqrt(1 + lateral**2), False),
     }
-    for slip, wrong in slips.items():
-        if same(wrong):
-            raise NotYet(slip)
+    expect_no_slip(got, slips, same)
     column = int(np.argmax(~np.isclose(np.where(np.isinf(got), -1, got),
                                        np.where(np.isinf(expected), -1, expected))))
     raise NotYet(f"column {column} gave {got[column]:.4f} m, expected "

@@ -24,7 +24,15 @@ from functools import lru_cache
 import numpy as np
 from scipy.ndimage import binary_dilation
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value, numbers
+from abcwc.checks.report import (
+    NotYet,
+    checker,
+    expect,
+    expect_no_slip,
+    expect_own,
+    format_value,
+    numbers,
+)
 from abcwc.mapping.grid import FREE_THRESH, InverseSensorModel, OccupancyGrid, integrate_log
 
 __all__ = [
@@ -113,9 +121,7 @@ def _explain(before, passed, returned, m, got, expected) -> None:
         "mind": reference_update_log_odds(before, passed, returned, m.l_occ, m.l_free,
                                           -np.inf, np.inf),
     }
-    for slip, wrong in slips.items():
-        if np.allclose(got, wrong):
-            raise NotYet(slip)
+    expect_no_slip(got, slips, np.allclose)
     cell = int(np.argmax(~np.isclose(got, expected)))
     raise NotYet(f"cell {cell}: from {before[cell]:.3f} you gave {got[cell]:.3f}, expected "
                  f"{expected[cell]:.3f}")

@@ -27,7 +27,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_no_slip, expect_own, format_value
 from abcwc.navigation.costmap import FREE_SPACE, LETHAL, Costmap, chair_footprint, footprint_cost
 from abcwc.navigation.dwa import DwaPlanner, DwaResult
 from abcwc.navigation.planner import astar_search, plan
@@ -159,11 +159,11 @@ def path_cost_check(fn: Callable) -> str:
             "mean of the two cells' weights (so a path costs the same both ways)":
                 (_MOVES, lambda length, a, b: length * b),
         }
-        for slip, (moves, step) in variants.items():
-            if math.isclose(got, _graph_cost(weights, start, goal, moves, step),
-                            rel_tol=1e-9):
-                raise NotYet(f"{slip} ({weights.shape[0]} x {weights.shape[1]} grid: "
-                             f"gave {got:.1f}, expected {expected:.1f})")
+        slips = {slip: _graph_cost(weights, start, goal, moves, step)
+                 for slip, (moves, step) in variants.items()}
+        expect_no_slip(got, slips, lambda got, wrong: math.isclose(got, wrong, rel_tol=1e-9),
+                       suffix=f" ({weights.shape[0]} x {weights.shape[1]} grid: gave "
+                              f"{got:.1f}, expected {expected:.1f})")
         if got < expected:
             raise NotYet(f"a {weights.shape[0]} x {weights.shape[1]} grid gave {got:.1f}, "
                          f"less than the least possible {expected:.1f}: does the search step "

@@ -27,7 +27,7 @@ from typing import NoReturn
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_no_slip, expect_own, format_value
 from abcwc.params import default_params
 from abcwc.paths import data_dir
 from abcwc.perception.tags import qr_modules
@@ -113,9 +113,7 @@ def _explain_optical(point, mount, got, expected) -> None:
         "y (down) was taken for the distance ahead: ahead is z":
             reference_optical_to_base((x, z, y), mount),
     }
-    for slip, wrong in slips.items():
-        if np.allclose(got, wrong, atol=1e-9):
-            raise NotYet(slip)
+    expect_no_slip(got, slips, lambda got, wrong: np.allclose(got, wrong, atol=1e-9))
     raise NotYet(f"the point {np.round(point, 3).tolist()} seen from the mount "
                  f"{tuple(round(v, 3) for v in mount)} gave {np.round(got, 4).tolist()}, "
                  f"expected {np.round(expected, 4).tolist()}")

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, ParamSpec, TypeVar
 
@@ -46,6 +46,7 @@ __all__ = [
     "expect",
     "expect_close",
     "expect_equal",
+    "expect_no_slip",
     "expect_own",
     "format_value",
     "numbers",
@@ -59,6 +60,8 @@ _MAX_MESSAGE = 300
 
 P = ParamSpec("P")
 F = TypeVar("F", bound=Callable[..., Any])
+A = TypeVar("A")
+T = TypeVar("T")
 
 
 class NotYet(Exception):
@@ -314,6 +317,25 @@ def expect_close(
         f"{where} gave {format_value(g)}{unit_s}, expected {format_value(e)}{unit_s}"
         f"{plus_minus}{_suffix('; '.join(notes))}"
     )
+
+
+def expect_no_slip(got: A, slips: Mapping[str, T], same: Callable[[A, T], bool], *,
+                   prefix: str = "", suffix: str = "") -> None:
+    """Name the usual slip the answer ``got`` is: ``slips`` maps what each slip is (its
+    hint) to the wrong answer it gives, and the first, in order, for which
+    ``same(got, wrong)`` holds raises :class:`NotYet` with ``prefix + hint + suffix``.
+    Nothing happens when none matches: the check goes on to its own message.
+
+    Example::
+
+        slips = {"that is the radius, not the diameter": expected / 2,
+                 "that is in mm: the check wants metres": expected * 1000}
+        expect_no_slip(got, slips, lambda got, wrong: abs(got - wrong) <= 1e-6,
+                       prefix=f"you gave {got:g}: ")
+    """
+    for hint, wrong in slips.items():
+        if same(got, wrong):
+            raise NotYet(prefix + hint + suffix)
 
 
 def numbers(value: Any, count: int, what: str, wanted: str) -> tuple[float, ...]:

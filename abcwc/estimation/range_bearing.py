@@ -25,6 +25,8 @@ import math
 
 import numpy as np
 
+from abcwc.geometry import wrap_angle
+
 
 def range_bearing(pose: np.ndarray, landmark: tuple[float, float],
                   mount: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
@@ -42,7 +44,7 @@ def range_bearing(pose: np.ndarray, landmark: tuple[float, float],
     if r2 < 1e-12:
         raise ValueError("the landmark is at the sensor: no bearing to it")
     r = math.sqrt(r2)
-    bearing = math.remainder(math.atan2(dy, dx) - theta - myaw, math.tau)
+    bearing = wrap_angle(math.atan2(dy, dx) - theta - myaw)
     dcx, dcy = -mx * s - my * c, mx * c - my * s  # d(c)/d(theta)
     jacobian = np.zeros((2, len(state)))
     jacobian[0, :3] = (-dx / r, -dy / r, -(dx * dcx + dy * dcy) / r)

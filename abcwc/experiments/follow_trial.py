@@ -25,11 +25,10 @@ import numpy as np
 from abcwc.behaviours.follow import FollowLaw, FollowSettings, TagFollower, ThesisFollower
 from abcwc.estimation.gyro import GyroOdometry
 from abcwc.experiments.navigation_trial import gap_to_people
-from abcwc.geometry import transform_points
+from abcwc.geometry import compose, transform_points
 from abcwc.paths import data_dir
 from abcwc.sim import SimBase
 from abcwc.sim.people import circles_of
-from abcwc.sim.sensors import sensor_pose
 from abcwc.sim.world import World, world_from_dict
 
 ANA_PATH = [[2.7, 1.4], [5.2, 1.1], [8.7, 1.0], [8.8, 3.6], [5.4, 3.9], [5.3, 6.8],
@@ -122,7 +121,7 @@ def run_follow_trial(seconds: float = 120.0, seed: int = 0, thesis: bool = False
         closest = min(closest, gap_to_people(chair_outline, circles))
         if k % every == every - 1:
             card_target = ana.tag_target()
-            origin, _ = sensor_pose(chair.pose, chair.params.depth_scan.mount)
+            origin = compose(chair.pose, chair.params.depth_scan.mount)[:2]
             distance = math.hypot(card_target.centre[0] - origin[0],
                                   card_target.centre[1] - origin[1])
             last = follower.log[-1] if follower.log else (0, math.nan, 0, 0, 0, "")

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from abcwc.experiments.views import random_views
+from abcwc.geometry import wrap_angle
 from abcwc.params import ChairParams
 from abcwc.perception.known_objects import KnownObject, ObjectDetector
 from abcwc.perception.signs import WORD_BOX, house_sign
@@ -84,7 +85,7 @@ def sweep_sign_views(features: str = "sift", shown: str = "EXIT", sought: str = 
         rows.append((true_range, true_bearing, view.turn, width_px, best is not None,
                      best.correlation if best else math.nan,
                      bool(best and best.correlation >= detector.min_correlation),
-                     math.remainder(best.bearing - true_bearing, math.tau) if best else math.nan,
+                     wrap_angle(best.bearing - true_bearing) if best else math.nan,
                      ms))
     columns = [np.array(c) for c in zip(*rows)]
     return SignSweep(detector.features,

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from abcwc.experiments.views import random_views
+from abcwc.geometry import wrap_angle
 from abcwc.params import ChairParams
 from abcwc.perception.tags import FollowCard, detect_qr_codes, find_marker
 
@@ -66,7 +67,7 @@ def sweep_tag_views(count: int = 120, seed: int = 0, card: FollowCard | None = N
             marker, tag = found
             side = marker.side_px
             range_error = (tag.range - true_range) / true_range
-            bearing_error = math.remainder(tag.bearing - true_bearing, math.tau)
+            bearing_error = wrap_angle(tag.bearing - true_bearing)
         qr = any(c.text == card.name for c in detect_qr_codes(gray))
         qr_upscaled = any(c.text == card.name for c in detect_qr_codes(gray, upscale=2))
         rows.append((true_range, true_bearing, turn, side, range_error, bearing_error, qr,

@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from abcwc.geometry import compose, wrap_angle
 from abcwc.params import ChairParams, default_params
 from abcwc.perception.camera import PinholeCamera
 from abcwc.sim.colour_camera import PlanarTarget, render_colour
-from abcwc.sim.sensors import sensor_pose
 from abcwc.sim.world import box_world
 from abcwc.types import Pose2D
 
@@ -42,7 +42,7 @@ class TargetView:
         """(m, rad left positive) from the camera to ``point`` (x, y m): the truth."""
         gap = np.asarray(point, dtype=float)[:2] - self.origin
         return (float(np.hypot(*gap)),
-                math.remainder(math.atan2(gap[1], gap[0]) - self.heading, math.tau))
+                wrap_angle(math.atan2(gap[1], gap[0]) - self.heading))
 
 
 def random_views(image: np.ndarray, width: float, count: int, seed: int,
@@ -54,8 +54,8 @@ def random_views(image: np.ndarray, width: float, count: int, seed: int,
     camera = PinholeCamera.from_fov(640, 480, p.depth_scan.fov_deg, p.depth_scan.vertical_fov_deg)
     room = box_world(24.0, 24.0)
     pose = Pose2D(2.0, 12.0, 0.0)
-    origin, heading = sensor_pose(pose, p.depth_scan.mount)
-    origin = np.asarray(origin, dtype=float)
+    sensor = compose(pose, p.depth_scan.mount)  # x, y, heading in the world
+    origin, heading = sensor[:2], float(sensor[2])
     rng = np.random.default_rng(seed)
     for _ in range(count):
         distance = rng.uniform(*distances)

@@ -92,10 +92,7 @@ class CarmenLog:
     def points(self, index: int, frame: str = "laser") -> np.ndarray:
         """Scan ``index``'s valid endpoints ``(M, 2)`` (m) in the ``"laser"`` frame, the
         robot's (``"base"``) or the odometry frame (``"odom"``)."""
-        valid = ~np.ma.getmaskarray(self.ranges[index])
-        r = self.ranges.data[index, valid]
-        a = self.angle_min[index] + self.angle_increment[index] * np.flatnonzero(valid)
-        xy = np.stack([r * np.cos(a), r * np.sin(a)], axis=-1)
+        xy = self.scan(index).points()
         if frame == "laser":
             return xy
         if frame == "base":

@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from abcwc.geometry import wrap_angle
+from abcwc.geometry import chain_poses, wrap_angle
 
 GZIP_MAGIC = b"\x1f\x8b"
 UPPER_TRIANGLE = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
@@ -247,8 +247,8 @@ def _information(upper: np.ndarray, path: Path, lines: list[int]) -> np.ndarray:
 def chain_odometry(ids: np.ndarray, edges: np.ndarray, measurements: np.ndarray,
                    path: str | Path = "pose graph") -> np.ndarray:
     """Initial poses (N, 3) from the odometry chain: pose 0 at the origin, pose k =
-    pose k-1 (+) the first edge from ``ids[k-1]`` to ``ids[k]`` (composed for all poses
-    at once: headings by a cumulative sum, then the steps rotated into the map and summed).
+    pose k-1 (+) the first edge from ``ids[k-1]`` to ``ids[k]``
+    (:func:`abcwc.geometry.chain_poses`).
 
     ``edges`` (M, 2) row indices, ``measurements`` (M, 3). GraphFileError naming
     ``path`` when some consecutive pair has no edge to place the later pose with.
@@ -262,13 +262,7 @@ def chain_odometry(ids: np.ndarray, edges: np.ndarray, measurements: np.ndarray,
         k = missing[0] + 1
         raise GraphFileError(f"{path}: no VERTEX_SE2 records and no odometry edge "
                              f"{ids[k - 1]} -> {ids[k]} to place vertex {ids[k]} with")
-    steps = measurements[step[1:]]
-    heading = np.concatenate([[0.0], np.cumsum(steps[:, 2])])   # unwrapped, rad
-    c, s = np.cos(heading[:-1]), np.sin(heading[:-1])
-    moves = np.column_stack([c * steps[:, 0] - s * steps[:, 1],
-                             s * steps[:, 0] + c * steps[:, 1]])   # each step in the map
-    positions = np.vstack([[0.0, 0.0], np.cumsum(moves, axis=0)])
-    return np.column_stack([positions, wrap_angle(heading)])
+    return chain_poses((0.0, 0.0, 0.0), measurements[step[1:]])
 
 
 def _format(value: float) -> str:

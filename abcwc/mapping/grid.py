@@ -172,17 +172,12 @@ class GridGeometry:
         ``frame_id``, e.g. ``compose(base_pose, mount)``). Every beam is traced at once
         (:func:`abcwc.mapping.raytrace.walk_cells`); cells outside the grid are dropped.
         """
-        ranges = np.asarray(scan.ranges, dtype=float)
-        hit = np.isfinite(ranges) & (ranges >= scan.range_min) & (ranges <= scan.range_max)
-        miss = (ranges == np.inf) | (np.isfinite(ranges) & (ranges > scan.range_max))
-        used = hit | miss
-        length = np.where(hit, ranges, scan.range_max)[used]
-        angles = scan.angles[used]
-        ends = transform_points(sensor_pose, np.column_stack([length * np.cos(angles),
-                                                              length * np.sin(angles)]))
+        hit = scan.hits()
+        traced = hit | scan.misses()  # a miss is traced to range_max and marks nothing
+        ends = transform_points(sensor_pose, scan.points(with_misses=True))
         start = self.to_cell_units(transform_points(sensor_pose, np.zeros(2)))
         walk = walk_cells(np.broadcast_to(start, ends.shape), self.to_cell_units(ends))
-        returned = hit[used][walk.segment] & walk.is_last
+        returned = hit[traced][walk.segment] & walk.is_last
         inside = self.contains(walk.row, walk.col)
         flat = walk.row * self.width + walk.col
         return flat[~returned & inside], flat[returned & inside]

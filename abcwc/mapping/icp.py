@@ -261,14 +261,6 @@ def _covariance(jacobian: np.ndarray, residuals: np.ndarray) -> np.ndarray:
     return variance * (vectors / values) @ vectors.T
 
 
-def scan_points(scan: LaserScan) -> np.ndarray:
-    """A scan's endpoints ``(M, 2)`` in the laser frame (m), no-return beams dropped."""
-    ranges = np.asarray(scan.ranges, dtype=float)
-    valid = np.isfinite(ranges) & (ranges > scan.range_min) & (ranges < scan.range_max)
-    angles = scan.angles[valid]
-    return np.stack([ranges[valid] * np.cos(angles), ranges[valid] * np.sin(angles)], axis=-1)
-
-
 def match_scans(reference: LaserScan, current: LaserScan,
                 initial: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0),
                 **options: Any) -> IcpResult:
@@ -276,7 +268,7 @@ def match_scans(reference: LaserScan, current: LaserScan,
 
     ``initial`` is the first guess (e.g. from odometry); ``options`` go to :func:`icp`.
     """
-    return icp(scan_points(current), scan_points(reference), initial, **options)
+    return icp(current.points(), reference.points(), initial, **options)
 
 
 def match_consecutive_scans(log: CarmenLog, first: int = 0, last: int | None = None,
@@ -306,14 +298,3 @@ def match_consecutive_scans(log: CarmenLog, first: int = 0, last: int | None = N
     return np.asarray(compose(compose(offset, deltas), inverse(offset)))
 
 
-def chain(start: np.ndarray | tuple[float, float, float], deltas: np.ndarray) -> np.ndarray:
-    """Poses ``(K + 1, 3)`` from ``start`` by composing relative poses ``(K, 3)`` in turn:
-    ``x_{k+1} = x_k (+) delta_k`` (headings by a cumulative sum, steps rotated by them)."""
-    start = np.asarray(start, dtype=float).reshape(3)
-    deltas = np.asarray(deltas, dtype=float).reshape(-1, 3)
-    headings = start[2] + np.concatenate([[0.0], np.cumsum(deltas[:, 2])])
-    c, s = np.cos(headings[:-1]), np.sin(headings[:-1])
-    steps = np.column_stack([c * deltas[:, 0] - s * deltas[:, 1],
-                             s * deltas[:, 0] + c * deltas[:, 1]])
-    xy = start[:2] + np.concatenate([[[0.0, 0.0]], np.cumsum(steps, axis=0)])
-    return np.column_stack([xy, wrap_angle(headings)])

@@ -178,21 +178,13 @@ class Costmap(GridGeometry):
                             ("raytrace_range", raytrace_range)):
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0 m, got {value!r}")
-        ranges = np.asarray(scan.ranges, dtype=float)
-        in_view = np.isfinite(ranges) & (ranges >= scan.range_min)
-        clears = in_view | (ranges == np.inf)  # inf: nothing within range, clear to the limit
-        length = np.minimum(np.where(in_view, ranges, np.inf), raytrace_range)[clears]
-        angles = scan.angles[clears]
         origin = self.to_cell_units(transform_points(sensor_pose, np.zeros(2)))
-        ends = transform_points(sensor_pose, np.column_stack([length * np.cos(angles),
-                                                              length * np.sin(angles)]))
+        # a beam that saw nothing within the limit is clear to the limit
+        ends = transform_points(sensor_pose, scan.points(raytrace_range, with_misses=True))
         walk = walk_cells(np.broadcast_to(origin, ends.shape), self.to_cell_units(ends))
         keep = ~walk.is_last & self.contains(walk.row, walk.col)  # the end cell: not cleared
         self.cost[walk.row[keep], walk.col[keep]] = FREE_SPACE
-        marking = in_view & (ranges <= min(obstacle_range, scan.range_max))
-        hits = transform_points(sensor_pose, np.column_stack(
-            [ranges[marking] * np.cos(scan.angles[marking]),
-             ranges[marking] * np.sin(scan.angles[marking])]))
+        hits = transform_points(sensor_pose, scan.points(obstacle_range))
         rows, cols = self.world_to_cell(hits)
         inside = self.contains(rows, cols)
         self.cost[rows[inside], cols[inside]] = LETHAL

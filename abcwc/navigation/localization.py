@@ -46,7 +46,7 @@ from abcwc.estimation.ekf import ChairEkf
 from abcwc.geometry import transform_points, wrap_angle, wrap_tick_delta
 from abcwc.mapping.correlative import LikelihoodField, correlative_match
 from abcwc.mapping.grid import OCCUPIED, GridGeometry
-from abcwc.mapping.icp import IcpTarget, TooFewPairsError, icp, scan_points
+from abcwc.mapping.icp import IcpTarget, TooFewPairsError, icp
 from abcwc.mapping.raytrace import walk_cells
 from abcwc.params import ChairParams, default_params
 from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame
@@ -188,7 +188,7 @@ class MapLocalizer:
 
     def match(self, scan: LaserScan) -> bool:
         """Lay ``scan`` on the map from the current estimate; True if the fix was taken."""
-        points = transform_points(self.mount, scan_points(scan))
+        points = transform_points(self.mount, scan.points())
         if len(points) < 10:
             return self._refuse(points, None)
         estimate = self.pose
@@ -226,7 +226,7 @@ class MapLocalizer:
         search's standard deviations are within ``max_std`` (m, rad: one place, not a
         corridor's many), the scan fits there as a fix must (``min_fitness``,
         ``max_rms``) and no more than ``see_through`` of its beams pass through a wall."""
-        points = transform_points(self.mount, scan_points(scan))
+        points = transform_points(self.mount, scan.points())
         if len(points) < 10:
             return False
         if self._field is None:

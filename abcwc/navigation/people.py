@@ -39,7 +39,6 @@ from scipy.cluster.hierarchy import fcluster, linkage
 
 from abcwc.geometry import PoseLike, transform_points
 from abcwc.mapping.grid import GridGeometry
-from abcwc.mapping.icp import scan_points
 from abcwc.types import LaserScan
 
 
@@ -88,7 +87,7 @@ class PeopleTracker:
 
     def detect(self, scan: LaserScan, sensor_pose: PoseLike) -> np.ndarray:
         """(K, 2) map-frame centres of the person candidates in one scan."""
-        points = transform_points(sensor_pose, scan_points(scan))
+        points = transform_points(sensor_pose, scan.points())
         if self.grid is not None and self.wall_distance is not None:
             rows, cols = self.grid.world_to_cell(points)
             on_map = self.grid.contains(rows, cols)

@@ -38,9 +38,9 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
+from abcwc.geometry import compose
 from abcwc.perception.camera import PinholeCamera
 from abcwc.sim.depth_camera import column_hits, floor_depth
-from abcwc.sim.sensors import sensor_pose
 from abcwc.sim.world import WALL_HEIGHT
 from abcwc.types import Pose2D
 
@@ -138,7 +138,8 @@ def render_colour(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float
     ``imaging``'s lighting, blur and noise; without, it is the ideal image. With
     ``gray``, the image is (height x width) luminance (ITU-R BT.601, as OpenCV's
     RGB2GRAY), at a third of the cost."""
-    origin, heading = sensor_pose(pose, mount)
+    sensor = compose(pose, mount)  # x, y, heading in the world
+    origin, heading = sensor[:2], sensor[2]
     seen = column_hits(camera, origin, heading, segments, bands, circles, max_range)
     z_hits, low, high, slope = seen.z, seen.low, seen.high, seen.slope
     people = len(low) - len(seen.walls)

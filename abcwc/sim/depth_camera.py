@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from abcwc.geometry import compose
 from abcwc.perception.camera import PinholeCamera
 from abcwc.sim.raycast import cull_segments, ray_circle_hits, ray_segment_hits
-from abcwc.sim.sensors import sensor_pose
 from abcwc.types import Pose2D
 
 PERSON_HEIGHT = 1.75
@@ -79,7 +79,8 @@ def render_depth(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float,
     ``height`` m on the chair at ``pose``, mounted at ``mount`` (x, y, yaw in base_link),
     seeing wall ``segments`` (N, 4) standing between ``bands`` (N, 2), people
     ``circles`` (M, 3: x, y, radius) from the floor to ``PERSON_HEIGHT``, and the floor."""
-    origin, heading = sensor_pose(pose, mount)
+    sensor = compose(pose, mount)  # x, y, heading in the world
+    origin, heading = sensor[:2], sensor[2]
     widest = float(np.abs((np.array([0, camera.width - 1]) - camera.cx) / camera.fx).max())
     seen = column_hits(camera, origin, heading, segments, bands, circles,
                        max_range * math.hypot(1.0, widest))

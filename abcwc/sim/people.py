@@ -21,6 +21,7 @@ import math
 import numpy as np
 import pymunk
 
+from abcwc.geometry import wrap_angle
 from abcwc.sim.colour_camera import PlanarTarget
 from abcwc.sim.world import PersonSpec
 
@@ -125,9 +126,9 @@ class Walker:
                 self._direction = -self._direction
             self._target += self._direction
         going_to = self._waypoints[self._target]
-        turn = abs(math.remainder(
+        turn = abs(wrap_angle(
             math.atan2(going_to[1] - reached[1], going_to[0] - reached[0])
-            - math.atan2(reached[1] - came_from[1], reached[0] - came_from[0]), math.tau))
+            - math.atan2(reached[1] - came_from[1], reached[0] - came_from[0])))
         if turn > math.pi / 2:
             self._paused = max(self._paused, TURN_TIME * turn / math.pi)
 

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from abcwc.geometry import compose, transform_points
 from abcwc.params import ChairParams, GyroParams, IrRingParams, RangeSensorParams
 from abcwc.sim.raycast import cone_nearest_distance, ray_distances
 from abcwc.types import LaserScan, Pose2D
@@ -32,13 +33,6 @@ class GaussianStream:
         row = self._buffer[self._index]
         self._index += 1
         return row
-
-
-def sensor_pose(pose: Pose2D, mount: tuple[float, float, float]) -> tuple[np.ndarray, float]:
-    """World position (2,) and heading (rad) of a sensor mounted at ``mount`` (x, y, yaw)."""
-    c, s = math.cos(pose.theta), math.sin(pose.theta)
-    mx, my, yaw = mount
-    return np.array([pose.x + c * mx - s * my, pose.y + s * mx + c * my]), pose.theta + yaw
 
 
 class Encoders:
@@ -101,8 +95,8 @@ class Sonar:
     def read(self, pose: Pose2D, segments: np.ndarray, circles: np.ndarray) -> float:
         """One reading (m)."""
         p = self.params
-        origin, heading = sensor_pose(pose, p.mount)
-        distance = cone_nearest_distance(origin, heading, self._half, segments, circles)
+        sensor = compose(pose, p.mount)  # x, y, heading in the world
+        distance = cone_nearest_distance(sensor[:2], sensor[2], self._half, segments, circles)
         if math.isfinite(distance):
             distance += float(self._noise.next()[0]) * p.noise_std
         distance = min(max(distance, p.min_range), p.max_range)
@@ -124,9 +118,7 @@ class IrRing:
     def read(self, pose: Pose2D, segments: np.ndarray, circles: np.ndarray) -> np.ndarray:
         """Six readings (m)."""
         p = self.params
-        c, s = math.cos(pose.theta), math.sin(pose.theta)
-        mx, my = self.mounts[:, 0], self.mounts[:, 1]
-        origins = np.column_stack([pose.x + c * mx - s * my, pose.y + s * mx + c * my])
+        origins = transform_points(pose, self.mounts[:, :2])  # the rangers in the world
         out = ray_distances(origins, pose.theta + self.mounts[:, 2], segments, circles,
                             p.max_range + 4 * p.noise_std)
         out = out + self._noise.next() * p.noise_std
@@ -165,8 +157,8 @@ class ScanSensor:
              stamp: float) -> LaserScan:
         """One scan."""
         p = self.params
-        origin, heading = sensor_pose(pose, p.mount)
-        ranges = ray_distances(origin, heading + self.beam_angles, segments, circles,
+        sensor = compose(pose, p.mount)  # x, y, heading in the world
+        ranges = ray_distances(sensor[:2], sensor[2] + self.beam_angles, segments, circles,
                                p.max_range)
         finite = np.isfinite(ranges)
         if p.noise_std > 0:

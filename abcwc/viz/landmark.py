@@ -10,6 +10,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from abcwc.geometry import wrap_angle
 from abcwc.types import Pose2D
 from abcwc.viz.scene import plot_chair
 
@@ -75,7 +76,7 @@ def plot_distance_and_bearing() -> Figure:
     ax2.text(goal2[0] + 0.1, goal2[1] - 0.35, "goal: bearing -170°", color="tab:red", ha="center")
     ax2.text(-2.9, 0.85, "heading 170°", color="tab:blue", ha="center")
     raw = math.radians(-170) - p1.theta
-    wrapped = math.remainder(raw, 2 * math.pi)
+    wrapped = wrap_angle(raw)
     _angle_arc(ax2, (0, 0), 1.1, p1.theta, p1.theta + raw, "tab:orange",
               f"unwrapped: {math.degrees(raw):.0f}°\n(the long way round)", (1.75, -1.45), ls="--")
     _angle_arc(ax2, (0, 0), 2.2, p1.theta, p1.theta + wrapped, "tab:green",

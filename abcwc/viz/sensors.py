@@ -43,16 +43,13 @@ def mount_pose(pose: PoseLike, mount: Mount) -> tuple[float, float, float]:
 
 def scan_to_points(scan: LaserScan, pose: PoseLike, mount: Mount = (0.0, 0.0, 0.0),
                    ) -> np.ndarray:
-    """World points (K, 2) of a scan's returns; beams without a finite range are dropped.
+    """World points (K, 2) of a scan's returns (:meth:`LaserScan.points`: beams without
+    a finite range within the scan's bounds are dropped).
 
     ``pose`` is the chair's (base_link) pose when the scan was taken and ``mount`` the
     scanner's x, y, yaw in base_link (e.g. ``params.lidar.mount``).
     """
-    ranges = np.asarray(scan.ranges, dtype=float)
-    keep = np.isfinite(ranges)
-    angles = scan.angles[keep]
-    in_scanner = np.column_stack([ranges[keep] * np.cos(angles), ranges[keep] * np.sin(angles)])
-    return transform_points(mount_pose(pose, mount), in_scanner)
+    return transform_points(mount_pose(pose, mount), scan.points())
 
 
 def plot_scan(scan: LaserScan, pose: PoseLike, mount: Mount, ax: Axes | None = None,

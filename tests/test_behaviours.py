@@ -95,7 +95,8 @@ def test_fail_needs_a_reason_and_stops_the_chair():
 def test_every_behaviour_follows_the_interface():
     odometry = Odometry()
     for behaviour in (GoToLandmark((1.0, 0.0), odometry), ThesisGoToLandmark((1, 0), odometry),
-                      FollowWaypoints([(1.0, 0.0)]), SquareDriver(odometry), SonarAvoider()):
+                      FollowWaypoints([(1.0, 0.0)], GroundTruth()), SquareDriver(odometry),
+                      SonarAvoider()):
         assert isinstance(behaviour, Behaviour), type(behaviour).__name__
         assert behaviour.status is Status.RUNNING and behaviour.rate_hz == LOOP_RATE_HZ
 
@@ -108,7 +109,7 @@ def test_a_cancelled_sonar_avoider_sends_neutral_pots():
 
 
 def test_waypoints_succeed_after_the_last_and_reset_restarts_the_route():
-    route = FollowWaypoints([(1.0, 0.0), (1.0, 1.0)], tolerance=0.2)
+    route = FollowWaypoints([(1.0, 0.0), (1.0, 1.0)], GroundTruth(), tolerance=0.2)
     route(make_frame(0.0, truth=SimTruth(Pose2D())))
     assert route.index == 0
     route(make_frame(0.02, truth=SimTruth(Pose2D(0.9, 0.0, 0.0))))
@@ -147,8 +148,9 @@ def test_the_square_driver_succeeds_after_four_legs():
     (lambda: GoToLandmark((1.0, True), Odometry()), "goal must be a finite"),
     (lambda: GoToLandmark((1.0, 2.0, 3.0), Odometry()), "goal must be a finite"),
     (lambda: GoToLandmark((1.0, 2.0), Odometry(), rate_hz=0), "rate_hz"),
-    (lambda: FollowWaypoints("ab"), "waypoints"),
-    (lambda: FollowWaypoints([(0, 0)], tolerance=-1), "tolerance"),
+    (lambda: FollowWaypoints("ab", GroundTruth()), "waypoints"),
+    (lambda: FollowWaypoints([(0, 0)], GroundTruth(), tolerance=-1), "tolerance"),
+    (lambda: FollowWaypoints([(0, 0)], None), "observe\\(frame\\) and pose"),
     (lambda: SonarAvoider(near=-1), "near"),
     (lambda: SonarAvoider(near=9.0), "near"),
     (lambda: SonarAvoider(reverse_time=math.nan), "reverse_time"),

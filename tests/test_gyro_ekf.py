@@ -182,7 +182,7 @@ def test_ekf_average_nees_inside_the_chi_square_band(calibration):
 def test_bias_state_converges_to_the_simulators_gyro_bias(calibration):
     sim = SimBase("floor", seed=5, errors="worn", people=False)
     wrong = sim.gyro.bias + 0.01  # start 2 turn-on sigmas off, and say so
-    log = sim.run(FollowWaypoints(floor_mixed_drive()), 120.0)
+    log = sim.run(FollowWaypoints(floor_mixed_drive(), GroundTruth()), 120.0)
     states, covs = filter_drive(log, (wrong, 0.01), calibration, seed=5)
     error = abs(states[-1, BIAS] - sim.gyro.bias)  # the sim's gyro holds the truth
     assert error < 0.1 * 0.01
@@ -195,7 +195,7 @@ def test_bias_state_converges_to_the_simulators_gyro_bias(calibration):
 def test_follow_waypoints_visits_them_in_order_and_stops():
     sim = SimBase(OPEN, seed=0, errors="ideal", people=False)
     points = [(3.0, 0.0), (3.0, 3.0), (0.0, 3.0)]
-    route = FollowWaypoints(points, tolerance=0.2, max_speed=0.6)
+    route = FollowWaypoints(points, GroundTruth(), tolerance=0.2, max_speed=0.6)
     log = sim.run(route, 40.0)
     assert route.status is Status.SUCCEEDED
     visits = [int(np.argmax(np.hypot(*(log.pose[:, :2] - p).T) < 0.25)) for p in points]
@@ -206,14 +206,14 @@ def test_follow_waypoints_visits_them_in_order_and_stops():
 
 def test_waypoint_route_refuses_bad_input():
     with pytest.raises(ValueError, match="waypoints"):
-        FollowWaypoints([])
+        FollowWaypoints([], GroundTruth())
     with pytest.raises(ValueError, match="waypoint 0"):
-        FollowWaypoints([(1.0, math.nan)])
+        FollowWaypoints([(1.0, math.nan)], GroundTruth())
     with pytest.raises(ValueError, match="laps"):
         floor_mixed_drive(0)
     frame = make_frame()
     with pytest.raises(ValueError, match="ground-truth"):
-        GroundTruth().update_frame(frame)
+        GroundTruth().observe(frame)
 
 
 def test_bench_ekf_reports_cycles_per_second():

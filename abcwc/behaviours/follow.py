@@ -11,8 +11,8 @@ measured. :class:`TagFollower` is the one to use:
 (:func:`~abcwc.perception.tags.square_pose`); a marker under ``min_marker_px`` across
 gives too poor a range to use (within 2 % from 20 px across, 6 % at 15 px). Its
 centre goes from the optical frame to base_link through the camera's mount, and to the
-odom frame through the chair's own odometry (wheels and gyro: a pose estimator with
-``update_frame``).
+odom frame through the chair's own odometry (wheels and gyro: a pose estimator,
+``observe(frame)`` then ``pose``).
 
 **Tracking.** The tag says *who*; the lidar says *where*, ten times a second, also when
 the card on the person's back has turned too far from the camera to be read (round a
@@ -77,9 +77,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from abcwc.behaviours.base import BehaviourBase
-from abcwc.behaviours.landmark import PoseEstimator
 from abcwc.control.safety import ClearanceCheck
 from abcwc.control.velocity import pot_command_to_twist
+from abcwc.estimation.estimator import PoseEstimator
 from abcwc.geometry import compose, transform_points, wrap_angle
 from abcwc.navigation.costmap import FREE_SPACE, Costmap, chair_footprint
 from abcwc.navigation.dwa import DwaPlanner
@@ -188,7 +188,8 @@ class TagFollower(BehaviourBase):
 
     # ---------------------------------------------------------------- every frame
     def observe(self, frame: SensorFrame) -> None:
-        self.pose = self.estimator.update_frame(frame)
+        self.estimator.observe(frame)
+        self.pose = self.estimator.pose
 
     # ---------------------------------------------------------------- 10 Hz
     def update(self, frame: SensorFrame) -> Twist:

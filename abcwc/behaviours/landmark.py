@@ -7,10 +7,11 @@ Distance and heading to the goal (thesis 4.2.2, eqns 11-12; eqn 11 as printed ha
     alpha = atan2(y_d - y_0, x_d - x_0) - theta_0       (eqn 12, wrapped to (-pi, pi])
 
 Two behaviours (:class:`~abcwc.behaviours.base.BehaviourBase`), each a controller for
-``Base.run``. Each takes a pose estimator, any object with ``update_frame(frame) ->
-Pose2D`` (:class:`abcwc.estimation.Odometry`, :class:`abcwc.estimation.GyroOdometry`,
-...), feeds it every frame, and succeeds (stops for good) once the estimate is within
-``tolerance`` of the goal.
+``Base.run``. Each takes a pose estimator
+(:class:`~abcwc.estimation.estimator.PoseEstimator`: ``observe(frame)``, then ``pose``:
+:class:`abcwc.estimation.Odometry`, :class:`abcwc.estimation.GyroOdometry`, the EKF's
+:class:`abcwc.estimation.EkfEstimator`, a map localiser, ...), feeds it every frame,
+and succeeds (stops for good) once the estimate is within ``tolerance`` of the goal.
 
 * :class:`ThesisGoToLandmark`: appendix A.10's turn-then-drive, as a state machine
   (:func:`turn_then_drive`): turn on the spot at a fixed rate while the heading is off,
@@ -49,9 +50,9 @@ Pose2D`` (:class:`abcwc.estimation.Odometry`, :class:`abcwc.estimation.GyroOdome
 from __future__ import annotations
 
 import math
-from typing import Protocol
 
 from abcwc.behaviours.base import LOOP_RATE_HZ, BehaviourBase, finite_point, positive_number
+from abcwc.estimation.estimator import PoseEstimator
 from abcwc.geometry import wrap_angle
 from abcwc.types import Pose2D, SensorFrame, Twist
 
@@ -60,12 +61,6 @@ DRIVE = "drive"
 REACHED = "reached"
 STATES = (TURN, DRIVE, REACHED)
 """The states of :func:`turn_then_drive`: turning on the spot, driving straight, stopped."""
-
-
-class PoseEstimator(Protocol):
-    """Anything that turns each SensorFrame into a pose estimate."""
-
-    def update_frame(self, frame: SensorFrame) -> Pose2D: ...
 
 
 def distance_and_bearing(pose: Pose2D, goal: tuple[float, float]) -> tuple[float, float]:
@@ -144,7 +139,8 @@ class GoalBehaviour(BehaviourBase):
         self.rho, self.alpha = distance_and_bearing(self.pose, self.goal)
 
     def observe(self, frame: SensorFrame) -> None:
-        self.pose = self.estimator.update_frame(frame)
+        self.estimator.observe(frame)
+        self.pose = self.estimator.pose
         self.rho, self.alpha = distance_and_bearing(self.pose, self.goal)
 
     def update(self, frame: SensorFrame) -> Twist:

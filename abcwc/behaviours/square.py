@@ -80,7 +80,8 @@ class SquareDriver(BehaviourBase):
         return x, y, wrap_angle(s.theta + self.sign * (i - 1) * math.pi / 2)
 
     def observe(self, frame: SensorFrame) -> None:
-        self.pose = self.odometry.update_frame(frame)
+        self.odometry.observe(frame)
+        self.pose = self.odometry.pose
         if self.start is None:
             self.start = self.pose
 

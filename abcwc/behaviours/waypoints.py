@@ -2,10 +2,11 @@
 
 :class:`FollowWaypoints` is a behaviour (a controller for ``Base.run``): it drives to
 each ``(x, y)`` in turn, switching to the next as soon as the current one is within
-``tolerance``, and succeeds after the last. It steers by any pose
-estimator (``update_frame(frame) -> Pose2D``). :class:`GroundTruth` is the
-simulator's own pose, for routes that must not depend on the estimators being
-tested: the filters then only listen, they never steer.
+``tolerance``, and succeeds after the last. It steers by the pose estimator it is given
+(:class:`~abcwc.estimation.estimator.PoseEstimator`; there is no default: a route
+driven on a real chair needs one that works there). :class:`GroundTruth` is the
+simulator's own pose in the same shape, for routes that must not depend on the
+estimators being tested: the filters then only listen, they never steer.
 
 :func:`floor_mixed_drive` is the five-minute mixed drive in the floor world used by
 the EKF's tests and chapter 10: up and down the corridor (y 8..10 m) at up to
@@ -18,7 +19,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from abcwc.behaviours.base import LOOP_RATE_HZ, BehaviourBase, finite_point
-from abcwc.behaviours.landmark import GoToLandmark, PoseEstimator
+from abcwc.behaviours.landmark import GoToLandmark
+from abcwc.estimation.estimator import PoseEstimator
 from abcwc.types import Pose2D, SensorFrame, Twist
 
 # One lap of the floor world's corridor from its west end: east, weaving, then back.
@@ -27,27 +29,33 @@ _CORRIDOR_LAP = ((8.0, 8.8), (14.0, 9.3), (20.0, 8.7), (26.0, 9.3), (32.0, 8.8),
 
 
 class GroundTruth:
-    """A "pose estimator" that reads the simulator's true pose from each frame."""
+    """A "pose estimator" that reads the simulator's true pose from each frame (the one
+    estimator shape: ``observe(frame)``, then :attr:`pose`)."""
 
-    def update_frame(self, frame: SensorFrame) -> Pose2D:
-        """``frame.truth.pose``; a real chair has none, so this refuses its frames."""
+    def __init__(self) -> None:
+        self.pose = Pose2D()
+
+    def observe(self, frame: SensorFrame) -> None:
+        """Take ``frame.truth.pose``; a real chair has none, so this refuses its frames."""
         if frame.truth is None:
             raise ValueError("this frame has no ground-truth pose (a real chair's frames "
                              "never do); steer with an estimator such as Odometry instead")
-        return frame.truth.pose
+        self.pose = frame.truth.pose
 
 
 class FollowWaypoints(BehaviourBase):
     """Drive through ``waypoints`` in order, then stop (succeeded).
 
-    ``estimator`` gives the pose to steer by (default :class:`GroundTruth`);
+    ``estimator`` gives the pose to steer by (any
+    :class:`~abcwc.estimation.estimator.PoseEstimator`; :class:`GroundTruth` in a
+    simulated study that must not depend on one);
     ``tolerance`` (m) is how close counts as reached; the other keywords go to the
     :class:`GoToLandmark` that drives each leg (``max_speed`` m/s, ``max_turn_rate``
     rad/s, gains). :attr:`index` is the waypoint being driven to.
     """
 
     def __init__(self, waypoints: Sequence[tuple[float, float]],
-                 estimator: PoseEstimator | None = None, tolerance: float = 0.5,
+                 estimator: PoseEstimator, tolerance: float = 0.5,
                  max_speed: float = 0.9, rate_hz: float = LOOP_RATE_HZ,
                  **leg_options: float):
         super().__init__(rate_hz)
@@ -57,7 +65,10 @@ class FollowWaypoints(BehaviourBase):
                              f"got {waypoints!r}")
         self.waypoints = [finite_point(point, f"waypoint {k}") for k, point in enumerate(points)]
         self.index = 0
-        self.leg = GoToLandmark(self.waypoints[0], estimator or GroundTruth(),
+        if not isinstance(estimator, PoseEstimator):
+            raise ValueError(f"estimator must have observe(frame) and pose (Odometry, "
+                             f"GyroOdometry, EkfEstimator, GroundTruth, ...), got {estimator!r}")
+        self.leg = GoToLandmark(self.waypoints[0], estimator,
                                 tolerance=tolerance, max_speed=max_speed, **leg_options)
 
     @property

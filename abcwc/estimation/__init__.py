@@ -1,12 +1,15 @@
 """Estimation: wheel odometry, UMBmark calibration, gyro fusion and the EKF.
 
 Estimators depend on nothing above them (no body, behaviour or experiment): they turn
-frames and logs into estimates. Driving the UMBmark squares lives in
-:class:`abcwc.behaviours.SquareDriver` and :mod:`abcwc.experiments.umbmark_trials`; the
-NEES Monte Carlo in :mod:`abcwc.experiments.nees`."""
+frames and logs into estimates. Every estimator fed frame by frame has one shape,
+:class:`PoseEstimator`: ``observe(frame)`` with every frame, then ``pose``. Driving the
+UMBmark squares lives in :class:`abcwc.behaviours.SquareDriver` and
+:mod:`abcwc.experiments.umbmark_trials`; the NEES Monte Carlo in
+:mod:`abcwc.experiments.nees`."""
 
 from abcwc.estimation.ekf import (
     ChairEkf,
+    EkfEstimator,
     EkfNoise,
     FastEkf,
     FilterpyEkf,
@@ -17,6 +20,7 @@ from abcwc.estimation.ekf import (
     noise_from_models,
     run_ekf,
 )
+from abcwc.estimation.estimator import PoseEstimator
 from abcwc.estimation.gyro import (
     GyroOdometry,
     allan_deviation,
@@ -52,7 +56,8 @@ from abcwc.estimation.umbmark import (
 from abcwc.geometry import wrap_tick_delta
 
 __all__ = [
-    "ChairEkf", "EkfNoise", "FastEkf", "FilterpyEkf", "GyroOdometry", "Odometry",
+    "ChairEkf", "EkfEstimator", "EkfNoise", "FastEkf", "FilterpyEkf", "GyroOdometry",
+    "Odometry", "PoseEstimator",
     "UmbmarkResult", "alpha_beta",
     "centres_of_gravity", "curve_radius",
     "e_max_syst", "encoder_ticks_to_wheel_distance", "estimate_gyro_bias",

@@ -94,7 +94,7 @@ from abcwc.estimation.odometry import (
 from abcwc.estimation.range_bearing import range_bearing
 from abcwc.log import RunLog
 from abcwc.params import ChairParams, default_params
-from abcwc.types import Pose2D
+from abcwc.types import Pose2D, SensorFrame
 
 DIM = 6
 X, Y, THETA, V, OMEGA, BIAS = range(DIM)
@@ -407,6 +407,15 @@ class ChairEkf:
             raise ValueError(f"gyro_z must be a finite rate (rad/s), got {gyro_z!r}")
         self.filter.update(np.array([gyro_z]), H_GYRO, self._r_gyro)
 
+    def step(self, d_left: float, d_right: float, dt: float, gyro_z: float) -> None:
+        """One control period: the wheels' travel (m, corrected) over ``dt`` (s), the
+        prediction over it, then the gyro sample (rad/s) at its end. The one feed of
+        the wheels and the gyro, over a log (:func:`run_ekf`) or frame by frame
+        (:class:`EkfEstimator`)."""
+        self.update_wheels(d_left, d_right, dt)
+        self.predict(dt)
+        self.update_gyro(gyro_z)
+
     def update_pose(self, pose: Pose2D, cov: np.ndarray) -> None:
         """Update with an absolute fix ``pose`` of covariance ``cov`` (3 x 3)."""
         _check_pose("pose", pose)
@@ -429,6 +438,41 @@ class ChairEkf:
                                geometry.wrap_angle(float(z[1] - expected[1]))])
         self.filter.update(h @ self.filter.x + innovation, h, np.asarray(cov, dtype=float),
                            angle=1)
+
+
+class EkfEstimator:
+    """A :class:`ChairEkf` fed frame by frame: the one estimator shape
+    (:class:`~abcwc.estimation.estimator.PoseEstimator`, ``observe(frame)`` then
+    :attr:`pose`). The first frame gives the gyro sample only; each later one the
+    wheels' travel since the one before (counts wrapped, times the filter's UMBmark
+    correction), the prediction and its gyro sample (:meth:`ChairEkf.step`)."""
+
+    def __init__(self, ekf: ChairEkf):
+        self.ekf = ekf
+        self._per_count = ekf.params.distance_per_count * np.asarray(ekf.correction, dtype=float)
+        self._ticks: tuple[int, int] | None = None
+        self._t: float | None = None
+
+    @property
+    def pose(self) -> Pose2D:
+        """The filter's pose estimate."""
+        return self.ekf.pose
+
+    def observe(self, frame: SensorFrame) -> None:
+        """Dead-reckon over the period that ended at ``frame``."""
+        ticks = (frame.ticks_left, frame.ticks_right)
+        if self._t is None:
+            self.ekf.update_gyro(frame.gyro_z)
+        else:
+            dt = frame.t - self._t
+            if dt <= 0:
+                raise ValueError(f"frames must come in time order: {frame.t} s after "
+                                 f"{self._t} s")
+            counts = np.array([geometry.wrap_tick_delta(ticks[0] - self._ticks[0]),  # type: ignore[index]
+                               geometry.wrap_tick_delta(ticks[1] - self._ticks[1])])  # type: ignore[index]
+            travel = counts * self._per_count
+            self.ekf.step(float(travel[0]), float(travel[1]), dt, frame.gyro_z)
+        self._ticks, self._t = ticks, frame.t
 
 
 class Sighting(Protocol):
@@ -476,10 +520,8 @@ def run_ekf(log: RunLog, ekf: ChairEkf, fixes: dict[int, Pose2D] | None = None,
     ekf.update_gyro(float(log.gyro_z[0]))
     states[0], covs[0] = ekf.filter.x, ekf.filter.P
     for k in range(1, n):
-        dt = float(dts[k - 1])
-        ekf.update_wheels(float(travel[k - 1, 0]), float(travel[k - 1, 1]), dt)
-        ekf.predict(dt)
-        ekf.update_gyro(float(log.gyro_z[k]))
+        ekf.step(float(travel[k - 1, 0]), float(travel[k - 1, 1]), float(dts[k - 1]),
+                 float(log.gyro_z[k]))
         if k in fixes:
             ekf.update_pose(fixes[k], fix_cov)
         for seen in sightings.get(k, ()):

@@ -189,7 +189,7 @@ def allan_deviation(rates: np.ndarray, period: float,
 class GyroOdometry:
     """Step by step: gyro heading, encoder distance (midpoint heading per step).
 
-    Feed it every frame (:meth:`update_frame`); the gyro sample of one frame turns
+    Feed it every frame (:meth:`observe`); the gyro sample of one frame turns
     the heading over the period up to the next. Counts may wrap at ``bits`` width.
     ``bias`` (rad/s), ``correction`` (UMBmark's ``(c_left, c_right)``) and ``start``
     are checked here (ValueError).
@@ -225,6 +225,7 @@ class GyroOdometry:
         self._last = (*counts, float(t), float(gyro_z))
         return self.pose
 
-    def update_frame(self, frame: SensorFrame) -> Pose2D:
-        """:meth:`update` from a SensorFrame."""
-        return self.update(frame.t, frame.ticks_left, frame.ticks_right, frame.gyro_z)
+    def observe(self, frame: SensorFrame) -> None:
+        """:meth:`update` from a SensorFrame (the one estimator shape,
+        :class:`~abcwc.estimation.estimator.PoseEstimator`: then read :attr:`pose`)."""
+        self.update(frame.t, frame.ticks_left, frame.ticks_right, frame.gyro_z)

@@ -354,6 +354,7 @@ class Odometry:
         self.last_step = (float(d_c), float(phi))
         return self.pose
 
-    def update_frame(self, frame: SensorFrame) -> Pose2D:
-        """:meth:`update` from a SensorFrame's counts."""
-        return self.update(frame.ticks_left, frame.ticks_right)
+    def observe(self, frame: SensorFrame) -> None:
+        """:meth:`update` from a SensorFrame's counts (the one estimator shape,
+        :class:`~abcwc.estimation.estimator.PoseEstimator`: then read :attr:`pose`)."""
+        self.update(frame.ticks_left, frame.ticks_right)

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from abcwc.behaviours import FollowWaypoints, floor_mixed_drive
+from abcwc.behaviours import FollowWaypoints, GroundTruth, floor_mixed_drive
 from abcwc.estimation.ekf import (
     ChairEkf,
     gyro_bias_prior,
@@ -181,7 +181,7 @@ def ekf_run(seed: int, seconds: float, calibration: OdometryCalibration,
     sim = SimBase("floor", seed=seed, errors="worn", people=False,
                   camera="gray" if fixes == "markers" else None)
     bias, bias_std = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), STILL_SECONDS).gyro_z)
-    route = FollowWaypoints(floor_mixed_drive())
+    route = FollowWaypoints(floor_mixed_drive(), GroundTruth())
     if fixes == "markers":
         log, sightings = record_with_sightings(sim, route, seconds)
     else:

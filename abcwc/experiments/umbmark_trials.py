@@ -80,7 +80,7 @@ def run_square(base: Base, direction: str, side: float = THESIS_SIDE,
         logs.append(base.run(driver, chunk))
         elapsed += chunk
     logs.append(base.run(driver, 1.0))  # succeeded: it sends zero; let the wheels stop
-    odometry.update_frame(base.read())
+    odometry.observe(base.read())
     poses = np.vstack([log.pose for log in logs])
     start = first.truth.pose if first.truth is not None else None
     if start is None or not np.isfinite(poses).all():
@@ -137,10 +137,10 @@ def calibrate_distance_scale(sim, seconds: float = 10.0, speed: float = 0.5,
     """
     start = sim.pose
     odometry = Odometry(sim.params, correction=correction, start=start)
-    odometry.update_frame(sim.frame)
+    odometry.observe(sim.frame)
     t0 = sim.t
     sim.run(lambda frame: Twist(speed, 0.0) if frame.t - t0 < seconds else Twist(), seconds + 1)
-    odometry.update_frame(sim.frame)
+    odometry.observe(sim.frame)
     true = math.hypot(sim.pose.x - start.x, sim.pose.y - start.y)
     if odometry.distance <= 0:
         raise RuntimeError("the chair did not move forward; cannot calibrate the scale")

@@ -42,8 +42,8 @@ import math
 
 import numpy as np
 
-from abcwc.estimation.ekf import ChairEkf
-from abcwc.geometry import transform_points, wrap_angle, wrap_tick_delta
+from abcwc.estimation.ekf import ChairEkf, EkfEstimator
+from abcwc.geometry import transform_points, wrap_angle
 from abcwc.mapping.correlative import LikelihoodField, correlative_match
 from abcwc.mapping.grid import OCCUPIED, GridGeometry
 from abcwc.mapping.icp import IcpTarget, TooFewPairsError, icp
@@ -125,9 +125,7 @@ class MapLocalizer:
         self.min_fitness, self.max_rms = float(min_fitness), float(max_rms)
         self.max_correspondence_distance = float(max_correspondence_distance)
         self.fix_floor = np.diag(np.square(fix_floor))
-        self._per_count = p.distance_per_count * np.asarray(self.ekf.correction, dtype=float)
-        self._ticks: tuple[int, int] | None = None
-        self._t: float | None = None
+        self.dead_reckoning = EkfEstimator(self.ekf)  # wheels and gyro, every frame
         self._last_stamp = -math.inf
         self._last_match = -math.inf
         self.lost_after = int(lost_after)
@@ -166,19 +164,7 @@ class MapLocalizer:
     def observe(self, frame: SensorFrame) -> None:
         """Dead-reckon over the period that ended at ``frame``, then match its scan if a
         new one has come and ``match_interval`` has passed since the last match."""
-        ticks = (frame.ticks_left, frame.ticks_right)
-        if self._t is not None:
-            dt = frame.t - self._t
-            if dt <= 0:
-                raise ValueError(f"frames must come in time order: {frame.t} s after "
-                                 f"{self._t} s")
-            counts = np.array([wrap_tick_delta(ticks[0] - self._ticks[0]),  # type: ignore[index]
-                               wrap_tick_delta(ticks[1] - self._ticks[1])])  # type: ignore[index]
-            travel = counts * self._per_count
-            self.ekf.update_wheels(float(travel[0]), float(travel[1]), dt)
-            self.ekf.predict(dt)
-        self.ekf.update_gyro(frame.gyro_z)
-        self._ticks, self._t = ticks, frame.t
+        self.dead_reckoning.observe(frame)
         scan = frame.readings.get(self.scan_frame)
         if (isinstance(scan, LaserScan) and scan.stamp > self._last_stamp
                 and frame.t - self._last_match >= self.match_interval - 1e-9):

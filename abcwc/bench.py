@@ -192,7 +192,7 @@ def bench_dwa() -> dict[str, float]:
 @benchmark("navigator", "the navigator crossing the floor world to the cafeteria with its "
            "people walking: real-time factor, and ms per control period and per decision")
 def bench_navigator() -> dict[str, float]:
-    from abcwc.navigation.navigator import Navigator
+    from abcwc.behaviours.navigator import Navigator
     from abcwc.sim.base import SimBase
 
     chair = SimBase("floor", seed=1, lidar=True)

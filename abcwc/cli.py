@@ -85,7 +85,7 @@ def _demo(args: argparse.Namespace) -> int:
     import matplotlib.pyplot as plt
 
     from abcwc import viz
-    from abcwc.navigation import SonarAvoider
+    from abcwc.behaviours import SonarAvoider
     from abcwc.sim import SimBase
 
     chair = SimBase(world=args.world, seed=args.seed)

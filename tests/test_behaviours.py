@@ -11,12 +11,12 @@ from abcwc.behaviours import (
     FollowWaypoints,
     GoToLandmark,
     GroundTruth,
+    SonarAvoider,
     SquareDriver,
     Status,
     ThesisGoToLandmark,
 )
 from abcwc.estimation import Odometry
-from abcwc.navigation import SonarAvoider
 from abcwc.sim.base import SimBase
 from abcwc.types import NEUTRAL, Pose2D, SimTruth, Twist, make_frame
 
@@ -166,7 +166,7 @@ def test_bad_settings_are_refused_with_what_is_allowed(make, message):
 
 
 def test_the_freer_side_counts_too_close_as_no_room_and_clear_as_the_ir_range():
-    from abcwc.navigation.sonar_avoid import freer_side
+    from abcwc.behaviours.sonar_avoid import freer_side
 
     inf = math.inf
     # ring: 0 ahead, 1 front-left, 2 back-left, 3 behind, 4 back-right, 5 front-right

@@ -11,9 +11,9 @@ import math
 import numpy as np
 import pytest
 
+from abcwc.behaviours import SonarAvoider
 from abcwc.checks import ch02, ch03
 from abcwc.control import turn_value, twist_to_pot_command
-from abcwc.navigation import SonarAvoider
 from abcwc.params import default_params
 from abcwc.types import PotCommand, Twist
 from tests.check_helpers import assert_not_yet, assert_pass, not_written

@@ -10,9 +10,9 @@ import pytest
 
 from abcwc.behaviours.base import Status
 from abcwc.behaviours.find_sign import SignSeeker
+from abcwc.behaviours.navigator import Navigator
 from abcwc.experiments.sign_sweep import sweep_sign_views
 from abcwc.geometry import compose
-from abcwc.navigation.navigator import Navigator
 from abcwc.perception.known_objects import (
     KnownObject,
     ObjectDetector,

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from abcwc.behaviours.base import Status
+from abcwc.behaviours.navigator import Navigator
 from abcwc.geometry import wrap_angle
 from abcwc.navigation.dwa import DwaResult
-from abcwc.navigation.navigator import Navigator
 from abcwc.navigation.people import PeopleTracker
 from abcwc.sim import SimBase
 from abcwc.sim.world import world_from_dict

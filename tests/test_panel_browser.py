@@ -48,7 +48,7 @@ def lab(tmp_path) -> Iterator[str]:
     notebook = nbformat.v4.new_notebook()
     notebook.cells = [nbformat.v4.new_code_cell(
         "%matplotlib widget\n"
-        "from abcwc.navigation.panel import NavigatorPanel\n"
+        "from abcwc.ui.navigator_panel import NavigatorPanel\n"
         "panel = NavigatorPanel.for_world('floor', seed=1, people=False)\n"
         "panel")]
     notebook.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
@@ -85,9 +85,9 @@ def lab(tmp_path) -> Iterator[str]:
 def test_a_click_on_the_map_drives_the_chair_to_that_point(lab):
     from playwright.sync_api import sync_playwright
 
-    from abcwc.navigation.navigator import Navigator
-    from abcwc.navigation.panel import MAP_AXES
+    from abcwc.behaviours.navigator import Navigator
     from abcwc.sim.world import load_world
+    from abcwc.ui.navigator_panel import MAP_AXES
 
     # where on the canvas the map point (8.0, 9.0) is: the panel's map fills MAP_AXES
     # of the figure with the global costmap's extent

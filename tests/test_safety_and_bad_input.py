@@ -171,8 +171,8 @@ def test_sonar_avoider_on_a_real_chairs_frames():
     nothing in range (drive on); a near sonar echo still turns, to the right."""
     from dataclasses import replace
 
+    from abcwc.behaviours import SonarAvoider
     from abcwc.control import twist_to_pot_command
-    from abcwc.navigation import SonarAvoider
 
     sim = SimBase("lab", seed=0)
     frame = replace(sim.frame, ir=np.full(6, np.nan), sonar=math.nan, truth=None)

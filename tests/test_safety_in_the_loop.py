@@ -25,12 +25,12 @@ from abcwc.behaviours import (
 )
 from abcwc.behaviours.find_sign import SignSeeker
 from abcwc.behaviours.follow import TagFollower, ThesisFollower
+from abcwc.behaviours.navigator import Navigator
+from abcwc.behaviours.sonar_avoid import SonarAvoider
 from abcwc.behaviours.voice import VoiceControl
 from abcwc.control.safety import ComfortLimits, SafetyFilter
 from abcwc.control.velocity import twist_to_pot_command
 from abcwc.estimation import GyroOdometry, Odometry
-from abcwc.navigation.navigator import Navigator
-from abcwc.navigation.sonar_avoid import SonarAvoider
 from abcwc.perception.known_objects import KnownObject, ObjectDetector
 from abcwc.perception.signs import WORD_BOX, house_sign
 from abcwc.perception.speech.commands import CommandSet

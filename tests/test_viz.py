@@ -23,8 +23,8 @@ from abcwc.control import direction_pot_command  # noqa: E402
 from abcwc.log import RunLog  # noqa: E402
 from abcwc.params import default_params  # noqa: E402
 from abcwc.sim import SimBase, load_world  # noqa: E402
-from abcwc.teleop import TeleopPanel, key_to_pot_command  # noqa: E402
 from abcwc.types import LaserScan, Pose2D, PotCommand, SimTruth, Twist, make_frame  # noqa: E402
+from abcwc.ui.teleop import TeleopPanel, key_to_pot_command  # noqa: E402
 
 
 @pytest.fixture(autouse=True)

@@ -4,8 +4,8 @@ import math
 
 import pytest
 
+from abcwc.behaviours.navigator import Navigator
 from abcwc.behaviours.voice import VoiceControl
-from abcwc.navigation.navigator import Navigator
 from abcwc.perception.speech.commands import CommandSet
 from abcwc.sim import SimBase
 from abcwc.types import Pose2D

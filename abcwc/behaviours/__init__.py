@@ -1,9 +1,12 @@
 """Behaviours: frame in, command out, with a status, a rate, reset and cancel.
 
 :mod:`abcwc.behaviours.base` holds the interface (:class:`Behaviour`,
-:class:`BehaviourBase`, :class:`Status`); the behaviours are the landmark goers, the
-waypoint follower and the UMBmark square driver (and, in :mod:`abcwc.navigation`, the
-sonar avoider).
+:class:`BehaviourBase`, :class:`Status`), below every behaviour: the landmark goers, the
+waypoint follower, the UMBmark square driver and the sonar avoider (here), the navigator
+(:mod:`abcwc.behaviours.navigator`), the tag followers (:mod:`abcwc.behaviours.follow`),
+the sign seeker (:mod:`abcwc.behaviours.find_sign`) and voice control
+(:mod:`abcwc.behaviours.voice`). None applies the safety filter: the body's control loop
+passes every command through it.
 """
 
 from abcwc.behaviours.base import LOOP_RATE_HZ, Behaviour, BehaviourBase, Status
@@ -14,9 +17,10 @@ from abcwc.behaviours.landmark import (
     ThesisGoToLandmark,
     distance_and_bearing,
 )
+from abcwc.behaviours.sonar_avoid import SonarAvoider
 from abcwc.behaviours.square import SquareDriver
 from abcwc.behaviours.waypoints import FollowWaypoints, GroundTruth, floor_mixed_drive
 
 __all__ = ["LOOP_RATE_HZ", "Behaviour", "BehaviourBase", "FollowWaypoints", "GoToLandmark",
-           "GoalBehaviour", "GroundTruth", "PoseEstimator", "SquareDriver", "Status",
-           "ThesisGoToLandmark", "distance_and_bearing", "floor_mixed_drive"]
+           "GoalBehaviour", "GroundTruth", "PoseEstimator", "SonarAvoider", "SquareDriver",
+           "Status", "ThesisGoToLandmark", "distance_and_bearing", "floor_mixed_drive"]

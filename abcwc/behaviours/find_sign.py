@@ -30,7 +30,7 @@ from abcwc.types import CAMERA_FRAME, CameraImage, SensorFrame, Twist
 
 class SignSeeker(BehaviourBase):
     """Turn until ``detector`` finds ``name`` (verified), then face it (module notes).
-    ``navigator`` (a :class:`~abcwc.navigation.navigator.Navigator`) and ``vantage``
+    ``navigator`` (a :class:`~abcwc.behaviours.navigator.Navigator`) and ``vantage``
     (place names or poses it can go to) let it look again from elsewhere."""
 
     def __init__(self, detector: ObjectDetector, name: str, turn_rate: float = 0.4,

@@ -104,11 +104,11 @@ def floor_survey():
     """200 s across the floor (the navigator to the lab, the cafeteria and back to the
     start, seed 14), its lidar scans with the wheel odometry as a laser log, and SLAM with
     and without loop closure: ``(world, log, laser, with_loops, without)``."""
+    from abcwc.behaviours.navigator import Navigator
     from abcwc.estimation.odometry import odometry_from_log
     from abcwc.experiments.navigation_trial import calibrated_ekf
     from abcwc.mapping.run_scans import laser_log_from_run
     from abcwc.mapping.slam import SlamSettings, run_slam
-    from abcwc.navigation.navigator import Navigator
     from abcwc.sim import SimBase
 
     chair = SimBase("floor", seed=14, lidar=True, people=False)

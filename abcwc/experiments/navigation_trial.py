@@ -27,11 +27,11 @@ from functools import lru_cache
 import numpy as np
 
 from abcwc.behaviours.base import Status
+from abcwc.behaviours.navigator import Navigator, NavigatorSettings
 from abcwc.estimation.ekf import ChairEkf, gyro_bias_prior, noise_from_models
 from abcwc.experiments.nees import STILL_SECONDS, OdometryCalibration, calibrate_worn_chair
 from abcwc.geometry import transform_points
 from abcwc.navigation.costmap import FREE_SPACE, LETHAL, footprint_cost
-from abcwc.navigation.navigator import Navigator, NavigatorSettings
 from abcwc.navigation.planner import NoPathError, plan
 from abcwc.sim import SimBase
 from abcwc.sim.people import circles_of

@@ -1,6 +1,5 @@
-"""Navigation: the sonar avoider; costmaps (:mod:`abcwc.navigation.costmap`) and the global
-planner (:mod:`abcwc.navigation.planner`) for the navigator to come."""
-
-from abcwc.navigation.sonar_avoid import SonarAvoider
-
-__all__ = ["SonarAvoider"]
+"""Navigation's parts: costmaps (:mod:`abcwc.navigation.costmap`, with the range-sensor
+layer), the global planner (:mod:`abcwc.navigation.planner`), DWA
+(:mod:`abcwc.navigation.dwa`), people tracking (:mod:`abcwc.navigation.people`) and map
+localisation (:mod:`abcwc.navigation.localization`). The behaviours that use them, the
+navigator and the sonar avoider among them, live in :mod:`abcwc.behaviours`."""

@@ -7,7 +7,7 @@ the navigator drives there (or says why it cannot), redrawing every ``refresh`` 
 the status line gives the outcome. In JupyterLab::
 
     %matplotlib widget
-    from abcwc.navigation.panel import NavigatorPanel
+    from abcwc.ui.navigator_panel import NavigatorPanel
     panel = NavigatorPanel.for_world("floor", seed=1)
     panel
 
@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from abcwc.navigation.navigator import Navigator
+from abcwc.behaviours.navigator import Navigator
 from abcwc.types import Pose2D
 
 MAP_AXES = (0.07, 0.09, 0.91, 0.85)

@@ -10,21 +10,24 @@ import json
 import statistics
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 from abcwc.types import Twist
 
 Benchmark = Callable[[], dict[str, float]]
-BENCHMARKS: dict[str, tuple[str, Benchmark, bool]] = {}
-"""name -> (description, function, whether to repeat it: False for a deterministic one)."""
+BENCHMARKS: dict[str, tuple[str, Benchmark, bool, Callable[[], object] | None]] = {}
+"""name -> (description, function, whether to repeat it: False for a deterministic one,
+what it needs: a check that raises when it cannot run here, or None)."""
 
 
-def benchmark(name: str, description: str,
-              repeat: bool = True) -> Callable[[Benchmark], Benchmark]:
+def benchmark(name: str, description: str, repeat: bool = True,
+              needs: Callable[[], object] | None = None) -> Callable[[Benchmark], Benchmark]:
     """Register a benchmark under ``name``; ``repeat=False``: its figures do not vary
-    from run to run, so it runs once whatever ``repeats`` says."""
+    from run to run, so it runs once whatever ``repeats`` says; ``needs``: called before
+    any benchmark runs, it raises (one line for the user) when this one cannot run."""
 
     def register(fn: Benchmark) -> Benchmark:
-        BENCHMARKS[name] = (description, fn, repeat)
+        BENCHMARKS[name] = (description, fn, repeat, needs)
         return fn
 
     return register
@@ -406,14 +409,20 @@ print(seconds, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
 """
 
 
-@benchmark("notebooks", "each solution notebook: execution time (s) and kernel peak memory (MB)")
+def _solutions_folder() -> Path:
+    """The checkout's ``solutions/``; NotACheckoutError when abcwc is an installed copy."""
+    from abcwc.paths import require_checkout
+
+    return require_checkout("the notebooks benchmark (it runs solutions/)") / "solutions"
+
+
+@benchmark("notebooks", "each solution notebook: execution time (s) and kernel peak memory (MB)",
+           needs=_solutions_folder)
 def bench_notebooks() -> dict[str, float]:
     import subprocess
     import sys
 
-    from abcwc.paths import require_checkout
-
-    solutions = require_checkout("the notebooks benchmark (it runs solutions/)") / "solutions"
+    solutions = _solutions_folder()
     figures: dict[str, float] = {}
     for path in sorted(solutions.glob("*.ipynb")):
         done = subprocess.run([sys.executable, "-c", _NOTEBOOK_RUNNER, str(path)],
@@ -439,6 +448,9 @@ def run_benchmarks(names: list[str] | None = None, repeats: int = 3,
     from tqdm.auto import tqdm
 
     results: dict[str, dict] = {}
+    for name in names:  # a benchmark that cannot run here says so before any runs
+        if BENCHMARKS[name][3] is not None:
+            BENCHMARKS[name][3]()
     with tqdm(total=sum(counts.values()), desc="bench", unit="run", disable=not progress) as bar:
         for name in names:
             bar.set_description(f"bench {name}")

@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.slam_data import slam_file
 
 from abcwc import bench
 from abcwc.cli import build_parser, error_line, main
 from abcwc.log import RunLog
+from abcwc.mapping.slam_data import slam_file
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -64,7 +64,7 @@ def test_demo_refuses_unknown_world(tmp_path, capsys):
 
 def test_bench_table_and_json(monkeypatch, capsys):
     calls = iter([{"x": 1.0}, {"x": 3.0}, {"x": 2.0}])
-    monkeypatch.setitem(bench.BENCHMARKS, "fake", ("a fake", lambda: next(calls), True))
+    monkeypatch.setitem(bench.BENCHMARKS, "fake", ("a fake", lambda: next(calls), True, None))
     assert main(["bench", "fake", "--json", "--repeats", "3"]) == 0
     assert json.loads(capsys.readouterr().out) == {"fake": {"x": 2.0}}  # the median
     with pytest.raises(ValueError, match="unknown benchmark"):
@@ -72,7 +72,7 @@ def test_bench_table_and_json(monkeypatch, capsys):
 
 
 def test_bench_shows_its_runs_unless_quiet(monkeypatch, capsys):
-    monkeypatch.setitem(bench.BENCHMARKS, "fake", ("a fake", lambda: {"x": 1.0}, True))
+    monkeypatch.setitem(bench.BENCHMARKS, "fake", ("a fake", lambda: {"x": 1.0}, True, None))
     assert main(["bench", "fake", "--repeats", "2"]) == 0
     err = capsys.readouterr().err
     assert "bench fake" in err and "2/2" in err

@@ -237,7 +237,7 @@ def run_cli(*args: str) -> subprocess.CompletedProcess:
 
 def test_cli_solves_and_writes(tmp_path, small_world):
     source = write_g2o(small_world.graph, tmp_path / "world.g2o")
-    out = tmp_path / "solved.g2o.gz"
+    out = tmp_path / "solved"
     done = run_cli(str(source), "--out", str(out), "--robust", "huber")
     assert done.returncode == 0, done.stderr
     first = done.stdout.splitlines()[0]
@@ -246,7 +246,7 @@ def test_cli_solves_and_writes(tmp_path, small_world):
     initial, final = float(words[2]), float(words[4])
     assert initial == pytest.approx(chi2(small_world.graph.poses, small_world.graph), rel=1e-5)
     assert words[6] == "iterations" and words[8] == "s" and final < initial
-    solved = read_g2o(out)
+    solved = read_g2o(out / "optimised.g2o")
     assert chi2(solved.poses, solved) == pytest.approx(final, rel=1e-5)
 
 

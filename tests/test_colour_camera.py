@@ -14,6 +14,7 @@ from abcwc.sim.colour_camera import (
     CEILING_RGB,
     LUMINANCE,
     PlanarTarget,
+    nearest_cover,
     render_colour,
     world_to_optical,
 )
@@ -103,6 +104,26 @@ def test_grey_is_the_colour_image_s_luminance_and_noise_is_seeded():
     again = render(walls, bands, rng=np.random.default_rng(4))
     other = render(walls, bands, rng=np.random.default_rng(5))
     assert np.array_equal(one, again) and not np.array_equal(one, other)
+
+
+def test_each_pixel_shows_the_nearest_layer_covering_it_as_painting_far_to_near_would():
+    rng = np.random.default_rng(11)
+    rows, width, layers = 40, 300, 6
+    top = rng.uniform(-10.0, 50.0, (width, layers)).astype(np.float32)
+    bottom = (top + rng.uniform(-5.0, 30.0, (width, layers))).astype(np.float32)
+    top[rng.random((width, layers)) < 0.1] = np.inf  # a layer the column's ray missed
+    bottom[rng.random((width, layers)) < 0.05] = np.inf
+    top[rng.random((width, layers)) < 0.05] = -np.inf
+    bottom[rng.random((width, layers)) < 0.03] = np.nan
+    top[:5] = np.round(top[:5])  # runs that start and end on a row exactly
+    bottom[:5] = np.round(bottom[:5])
+    painted = np.full((rows, width), -1)
+    v = np.arange(rows, dtype=np.float32)[:, None]
+    for j in range(layers):  # far to near, each layer over the ones behind it
+        painted[(v >= top[:, j]) & (v <= bottom[:, j])] = j
+    assert np.array_equal(nearest_cover(top, bottom, rows), painted)
+    with pytest.raises(ValueError, match="at most 8"):
+        nearest_cover(np.zeros((3, 9), np.float32), np.ones((3, 9), np.float32), 4)
 
 
 def test_the_simulated_chair_sends_its_camera_image_in_the_frame():

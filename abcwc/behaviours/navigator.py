@@ -645,11 +645,13 @@ def _densify(points: np.ndarray, spacing: float) -> np.ndarray:
     """Points along the polyline ``points`` (K, 2) no more than ``spacing`` m apart."""
     if len(points) < 2:
         return points
-    pieces = [points[:1]]
-    for a, b in zip(points[:-1], points[1:]):
-        n = max(1, math.ceil(math.hypot(*(b - a)) / spacing))
-        pieces.append(a + np.outer(np.arange(1, n + 1) / n, b - a))
-    return np.concatenate(pieces)
+    steps = points[1:] - points[:-1]
+    counts = np.array([max(1, math.ceil(math.hypot(dx, dy) / spacing))
+                       for dx, dy in steps.tolist()])  # pieces of each segment
+    segment = np.repeat(np.arange(len(steps)), counts)
+    piece = np.arange(len(segment)) - np.repeat(np.cumsum(counts) - counts, counts) + 1
+    fraction = piece / counts[segment]  # 1/n, 2/n, .. 1 along each segment
+    return np.concatenate([points[:1], points[:-1][segment] + fraction[:, None] * steps[segment]])
 
 
 def _free_start(costmap: Costmap, pose: Pose2D) -> tuple[float, float]:

@@ -233,7 +233,11 @@ def refine_square_edges(gray: np.ndarray, corners: np.ndarray, reach: float = 2.
     that cannot be refitted are kept."""
     from scipy import ndimage
 
-    image = gray.astype(np.float64)
+    # only the pixels round the square are read: a crop reaching past every probe (and to
+    # the image's edge where a probe does, for mode="nearest") gives the same values
+    low = np.maximum(np.floor(corners.min(axis=0) - reach) - 1, 0).astype(int)
+    high = np.minimum(np.floor(corners.max(axis=0) + reach) + 3, gray.shape[1::-1]).astype(int)
+    image = gray[low[1]:high[1], low[0]:high[0]].astype(np.float64)
     lines = []
     offsets = np.linspace(-reach, reach, int(4 * reach) + 1)
     for k in range(4):
@@ -250,8 +254,8 @@ def refine_square_edges(gray: np.ndarray, corners: np.ndarray, reach: float = 2.
         t = np.linspace(0.15, 0.85, samples)[:, None]
         points = a + t * along  # (S, 2) on the rough edge
         probe = points[:, None, :] + offsets[None, :, None] * normal  # (S, O, 2) x, y
-        values = ndimage.map_coordinates(image, [probe[..., 1], probe[..., 0]], order=1,
-                                         mode="nearest")  # (S, O): dark inside, light out
+        values = ndimage.map_coordinates(image, [probe[..., 1] - low[1], probe[..., 0] - low[0]],
+                                         order=1, mode="nearest")  # (S, O): dark in, light out
         dark, light = values[:, :2].mean(axis=1), values[:, -2:].mean(axis=1)
         half = (dark + light) / 2
         edges = []

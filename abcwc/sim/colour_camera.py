@@ -145,10 +145,7 @@ def render_colour(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float
     people = len(low) - len(seen.walls)
     colours = np.vstack([_wall_colours(seen.walls, seen.bands, origin),
                          PEOPLE_RGB[np.arange(people) % len(PEOPLE_RGB)]])
-    # each surface fills one run of rows in each column it crosses: row v's ray is at
-    # height `height - slope z` at depth z, so a surface standing from `low` to `high`
-    # z m ahead fills rows cy + fy (height - high) / z to cy + fy (height - low) / z.
-    # Paint the floor, then the nearest few surfaces of each column from far to near.
+    # the nearest few surfaces of each column, far to near
     keep = min(NEAREST_SURFACES, z_hits.shape[1])
     if keep < z_hits.shape[1]:
         nearest = np.argpartition(z_hits, keep - 1, axis=1)[:, :keep]
@@ -158,31 +155,31 @@ def render_colour(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float
     order = np.argsort(-z_near, axis=1)  # far to near (no hit, inf, first)
     nearest = np.take_along_axis(nearest, order, axis=1)
     z_near = np.take_along_axis(z_near, order, axis=1)
-    rows = np.arange(camera.height, dtype=np.float32)[:, None]
+    # each surface fills one run of rows in each column it crosses: row v's ray is at
+    # height `height - slope z` at depth z, so a surface standing from `low` to `high`
+    # z m ahead fills rows cy + fy (height - high) / z to cy + fy (height - low) / z.
+    # Each pixel shows the nearest surface whose run covers it, else the floor or ceiling.
+    hit = np.isfinite(z_near)
+    safe_z = np.where(hit, z_near, 1.0)
+    top = np.where(hit, camera.cy + camera.fy * (height - high[nearest]) / safe_z,
+                   np.inf).astype(np.float32)
+    bottom = (camera.cy + camera.fy * (height - low[nearest]) / safe_z).astype(np.float32)
+    shown = nearest_cover(top, bottom, camera.height)  # (H, W): layer index, -1 none
     floor_z = floor_depth(slope, height)
-    depth = floor_z.astype(np.float32)[:, None]
-    fade = 0.55 + 0.45 * np.exp(-floor_z / 12.0)  # the floor darkens into the distance
+    fade = (0.55 + 0.45 * np.exp(-floor_z / 12.0)).astype(np.float32)  # the floor darkens
     palette = np.vstack([CEILING_RGB, FLOOR_RGB, colours]).astype(np.float32)
     if gray:
-        palette = palette @ LUMINANCE[:, None]
-    label = np.where(np.isfinite(floor_z), 1, 0).astype(np.int16)[:, None]
-    for j in range(keep):
-        z = z_near[:, j]
-        hit = np.isfinite(z)
-        if not hit.any():
-            continue
-        safe_z = np.where(hit, z, 1.0)
-        top = np.where(hit, camera.cy + camera.fy * (height - high[nearest[:, j]]) / safe_z,
-                       np.inf).astype(np.float32)
-        bottom = (camera.cy + camera.fy * (height - low[nearest[:, j]]) / safe_z
-                  ).astype(np.float32)
-        fills = (rows >= top) & (rows <= bottom)
-        label = np.where(fills, (2 + nearest[:, j]).astype(np.int16), label)
-        depth = np.where(fills, z.astype(np.float32), depth)
-    image = palette[label]
-    image *= np.where(label == 1, fade.astype(np.float32)[:, None], np.float32(1.0))[..., None]
-    if gray:
-        image = image[..., 0]
+        palette = (palette @ LUMINANCE[:, None])[:, 0]
+    on_floor = np.isfinite(floor_z)
+    background = palette[on_floor.astype(int)]  # (H[, 3]) each row's floor or ceiling
+    background[on_floor] *= fade[on_floor].reshape(-1, *(1,) * (background.ndim - 1))
+    # each pixel the colour of the layer it shows, else its row's floor or ceiling
+    layer_colours = palette[2 + nearest.T].reshape(-1, *palette.shape[1:])  # (J W[, 3])
+    image = layer_colours[np.maximum(shown, 0).astype(np.intp) * camera.width
+                          + np.arange(camera.width)]
+    np.copyto(image, background[:, None], where=(shown < 0).reshape(
+        *shown.shape, *(1,) * (background.ndim - 1)))
+    depth = SceneDepth(shown, z_near.astype(np.float32), floor_z.astype(np.float32))
     for target in sorted(targets, key=lambda t: -_distance(t, origin)):
         _draw_target(image, depth, camera, target, origin, heading, height)
     if rng is not None:
@@ -203,11 +200,54 @@ def _wall_colours(walls: np.ndarray, bands: np.ndarray, origin: np.ndarray) -> n
     return base * lit[:, None]
 
 
+_HIGHEST_BIT = np.array([-1] + [n.bit_length() - 1 for n in range(1, 256)], np.int8)
+"""The index of the highest set bit of each byte, -1 for none."""
+
+
+def nearest_cover(top: np.ndarray, bottom: np.ndarray, rows: int) -> np.ndarray:
+    """(rows, W) int8: for each pixel, the last of the J layers whose run of rows covers
+    it (-1: none), each layer j covering rows ``top[:, j] <= v <= bottom[:, j]`` (W, J)
+    of each column. Layers are ordered far to near, so the last one covering a pixel is
+    the one seen there. Each layer sets its own bit over its run, through a difference
+    array summed down the rows; the highest bit set is the nearest layer (J <= 8)."""
+    width, layers = top.shape
+    if layers > 8:
+        raise ValueError(f"at most 8 layers fit the bit mask, got {layers}")
+    first, last = np.ceil(top), np.floor(bottom)  # whole rows inside each run
+    empty = ~(first <= last) | (last < 0) | (first > rows - 1)  # NaN too
+    first = np.where(empty, rows, np.clip(first, 0, rows)).astype(np.intp)
+    after = np.where(empty, rows, np.clip(last, -1, rows - 1) + 1).astype(np.intp)
+    marks = np.zeros((rows + 1, width), np.uint8)
+    columns = np.arange(width)
+    for j in range(layers):
+        bit = np.uint8(1 << j)
+        marks[first[:, j], columns] += bit
+        marks[after[:, j], columns] -= bit  # wraps round, and the sum below back
+    return _HIGHEST_BIT[np.cumsum(marks[:rows], axis=0, dtype=np.uint8)]
+
+
+@dataclass(frozen=True)
+class SceneDepth:
+    """The depth (m, along the optical axis) of what each pixel shows: layer ``shown``
+    (H, W; -1 the floor or nothing) at ``z`` (W, J), or the floor's ``floor_z`` (H,)."""
+
+    shown: np.ndarray
+    z: np.ndarray
+    floor_z: np.ndarray
+
+    def box(self, top: int, bottom: int, left: int, right: int) -> np.ndarray:
+        """(bottom - top, right - left): the depth of rows top..bottom-1, columns
+        left..right-1."""
+        shown = self.shown[top:bottom, left:right]
+        layer_z = self.z[np.arange(left, right), shown]
+        return np.where(shown >= 0, layer_z, self.floor_z[top:bottom, None])
+
+
 def _distance(target: PlanarTarget, origin: np.ndarray) -> float:
     return math.hypot(target.centre[0] - origin[0], target.centre[1] - origin[1])
 
 
-def _draw_target(image: np.ndarray, depth: np.ndarray, camera: PinholeCamera,
+def _draw_target(image: np.ndarray, depth: SceneDepth, camera: PinholeCamera,
                  target: PlanarTarget, origin: np.ndarray, heading: float,
                  height: float) -> None:
     """Warp ``target`` into ``image`` where it is in front of ``depth`` (module notes)."""
@@ -255,7 +295,7 @@ def _draw_target(image: np.ndarray, depth: np.ndarray, camera: PinholeCamera,
     facing_ray = normal[0] * u[None, :] + normal[1] * v[:, None] + normal[2]
     with np.errstate(divide="ignore", invalid="ignore"):
         plane_z = (normal @ p0) / facing_ray
-    visible = (mask > 0) & (plane_z > 0) & (plane_z <= depth[top:bottom, left:right] + 0.02)
+    visible = (mask > 0) & (plane_z > 0) & (plane_z <= depth.box(top, bottom, left, right) + 0.02)
     region = image[top:bottom, left:right]
     region[visible] = warped[visible]
 

@@ -214,6 +214,11 @@ def ir_frame(k: int) -> str:
     return f"ir_{k}_link"
 
 
+def _ir_frame_id(k: int) -> str:
+    """:func:`ir_frame`, from :data:`IR_FRAMES` for the ring's six (read every period)."""
+    return IR_FRAMES[k] if k < len(IR_FRAMES) else ir_frame(k)
+
+
 @dataclass(init=False)
 class SensorFrame:
     """Everything the chair reports in one control period.
@@ -293,9 +298,9 @@ class SensorFrame:
     def ir(self) -> np.ndarray:
         """The IR ring's ranges (m), one per ``ir_k_link`` from k = 0 (a new array:
         ``inf`` nothing in 0.2..1.5 m, ``-inf`` closer than 0.2 m)."""
-        values = []
-        while ir_frame(len(values)) in self.readings:
-            values.append(self.readings[ir_frame(len(values))])
+        values, readings = [], self.readings
+        while (frame_id := _ir_frame_id(len(values))) in readings:
+            values.append(readings[frame_id])
         return np.array(values, dtype=float)
 
     @ir.setter

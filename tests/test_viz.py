@@ -183,6 +183,30 @@ def test_plot_signals_panels_and_thinning():
         viz.plot_signals(log, names=("speed",))
 
 
+def test_the_safety_filter_figure_shows_what_was_wanted_sent_and_why():
+    start = Pose2D(5.0, 6.5, 0.0)
+    bare = SimBase(seed=0, start=start, people=False).run(lambda f: Twist(0.8, 0.0), 8.0,
+                                                          safety=None)
+    kept = SimBase(seed=0, start=start, people=False).run(lambda f: Twist(0.8, 0.0), 8.0)
+    fig = viz.plot_safety_filter(kept, bare, gap=lambda log: 10.0 - log.pose[:, 0],
+                                 gap_label="to the wall (m)")
+    ax_v, ax_gap, ax_why = fig.axes
+    labels = [line.get_label() for line in ax_v.get_lines()]
+    assert labels == ["wanted", "sent by the filter", "true, through the filter",
+                      "true, bare"]
+    np.testing.assert_array_equal(ax_v.get_lines()[1].get_ydata(), kept.cmd_twist[:, 0])
+    assert "contact" in [line.get_label() for line in ax_gap.get_lines()]  # the bare run
+    obstacle = ax_why.collections[0]  # the first band: obstacle stops
+    assert obstacle.get_label() == "obstacle" and len(obstacle.get_paths()) >= 1
+    assert ax_why.collections[1].get_label() == "speed limit"
+    assert not any(len(c.get_paths()) for c in ax_why.collections[1:])  # only obstacles
+    signals = viz.plot_signals(kept, ("v", "safety"))
+    assert "wanted (before the safety filter)" in [
+        line.get_label() for line in signals.axes[0].get_lines()]
+    with pytest.raises(ValueError, match="empty"):
+        viz.plot_safety_filter(kept.select(slice(0, 0)))
+
+
 def test_encoder_velocity_is_the_wheel_speed_and_survives_the_counter_wrap():
     p, n = default_params(), 50
     right = np.arange(n, dtype=np.int64) * 20  # 20 counts a period, steady

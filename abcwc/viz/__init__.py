@@ -39,7 +39,13 @@ from abcwc.viz.sensors import (
     scan_row,
     scan_to_points,
 )
-from abcwc.viz.signals import SIGNALS, encoder_velocity, plot_signals, true_velocity
+from abcwc.viz.signals import (
+    SIGNALS,
+    encoder_velocity,
+    plot_safety_filter,
+    plot_signals,
+    true_velocity,
+)
 
 __all__ = [
     "SIGNALS",
@@ -62,6 +68,7 @@ __all__ = [
     "plot_run",
     "plot_scan",
     "plot_sensors",
+    "plot_safety_filter",
     "plot_signals",
     "plot_trajectory",
     "plot_world",

@@ -62,6 +62,10 @@ def _velocity(log: RunLog, rows: np.ndarray, ax: Axes, which: int, unit: str) ->
     command = log.cmd_twist[rows, which]
     if np.isfinite(command).any():
         ax.plot(log.t[rows], command, "--", label="commanded")
+    wanted = log.channels.get("wanted_twist")
+    if wanted is not None and not np.array_equal(wanted[rows, which], command, equal_nan=True):
+        ax.plot(log.t[rows], wanted[rows, which], ":", color="k", linewidth=1,
+                label="wanted (before the safety filter)")
     ax.set_ylabel(unit)
 
 
@@ -115,9 +119,28 @@ def _collisions(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
     ax.set_ylabel("collisions")
 
 
+SAFETY_KINDS = ("obstacle", "speed limit", "joystick", "stale command")
+"""How the safety filter's reasons begin, one band each in the ``safety`` panel."""
+
+
+def _safety(log: RunLog, rows: np.ndarray, ax: Axes) -> None:
+    """One band per kind of the safety filter's changes (the RunLog's ``safety``
+    channel), filled where it changed the command for that reason."""
+    reasons = log.channels.get("safety")
+    if reasons is None:
+        reasons = np.full(len(log), "")
+    for k, kind in enumerate(SAFETY_KINDS):
+        hit = np.char.find(reasons[rows].astype(str), kind) >= 0
+        ax.fill_between(log.t[rows], k, k + 0.8, where=hit, step="post", alpha=0.5,
+                        label=kind)
+    ax.set_yticks(np.arange(len(SAFETY_KINDS)) + 0.4, SAFETY_KINDS, fontsize=7)
+    ax.set_ylim(-0.2, len(SAFETY_KINDS))
+    ax.set_ylabel("filter")
+
+
 SIGNALS: dict[str, Callable[[RunLog, np.ndarray, Axes], None]] = {
     "v": _v, "w": _w, "pots": _pots, "sonar": _sonar, "ir": _ir, "ticks": _ticks,
-    "gyro": _gyro, "collisions": _collisions,
+    "gyro": _gyro, "collisions": _collisions, "safety": _safety,
 }
 
 
@@ -126,8 +149,10 @@ def plot_signals(log: RunLog, names: Sequence[str] = ("v", "w", "pots", "sonar")
     """Time plots of ``names``, one panel each, sharing the time axis.
 
     Names: ``v`` and ``w`` (true speed and turn rate, or from the encoders on a real
-    chair, with the commanded Twist dashed), ``pots`` (bytes on the pot, sent ones
-    dashed), ``sonar``, ``ir``, ``ticks``, ``gyro``, ``collisions``. Long logs are
+    chair, with the commanded Twist dashed and, where the safety filter changed it, the
+    wanted one dotted), ``pots`` (bytes on the pot, sent ones dashed), ``sonar``, ``ir``,
+    ``ticks``, ``gyro``, ``collisions``, ``safety`` (where the filter changed the command,
+    by kind). Long logs are
     thinned to ``max_points`` samples. Returns the Figure.
     """
     import matplotlib.pyplot as plt
@@ -147,4 +172,48 @@ def plot_signals(log: RunLog, names: Sequence[str] = ("v", "w", "pots", "sonar")
         ax.grid(True, color="0.9", linewidth=0.6)
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
     axes[-1, 0].set_xlabel("t (s)")
+    return fig
+
+
+def plot_safety_filter(filtered: RunLog, bare: RunLog | None = None,
+                       gap: Callable[[RunLog], np.ndarray] | None = None,
+                       gap_label: str = "gap (m)", title: str | None = None) -> Figure:
+    """The safety filter at work on one run, and the same controller bare if given.
+
+    Top: the speed the controller wanted, the speed the filter sent and the true speed
+    (the bare run's true speed in grey); middle, with ``gap``: ``gap(log)`` per row for
+    each run (m, e.g. from the chair's front edge to a wall), contacts marked; bottom:
+    where the filter changed the command, by kind (the ``safety`` channel). Returns the
+    Figure.
+    """
+    import matplotlib.pyplot as plt
+
+    if len(filtered) == 0:
+        raise ValueError("the log is empty: nothing to plot")
+    runs = {"through the filter": filtered} | ({"bare": bare} if bare is not None else {})
+    panels = 2 + (gap is not None)
+    fig, axes = plt.subplots(panels, 1, sharex=True, figsize=(8.5, 2.0 + 1.6 * panels),
+                             layout="constrained", squeeze=False,
+                             gridspec_kw={"height_ratios": [3] + [2] * (gap is not None) + [1]})
+    ax_v, ax_why = axes[0, 0], axes[-1, 0]
+    ax_v.plot(filtered.t, filtered.wanted_twist[:, 0], "k--", linewidth=1, label="wanted")
+    ax_v.plot(filtered.t, filtered.cmd_twist[:, 0], color="tab:orange",
+              label="sent by the filter")
+    colours = {"through the filter": "tab:blue", "bare": "0.55"}
+    for name, log in runs.items():
+        ax_v.plot(log.t, true_velocity(log)[0], color=colours[name], label=f"true, {name}")
+        if gap is not None:
+            ax_gap = axes[1, 0]
+            ax_gap.plot(log.t, gap(log), color=colours[name], label=name)
+            touched = np.flatnonzero(np.diff(log.collisions, prepend=0) > 0)
+            ax_gap.plot(log.t[touched], gap(log)[touched], "x", color="tab:red",
+                        markersize=9, mew=2, label="contact" if len(touched) else None)
+            ax_gap.set_ylabel(gap_label)
+    ax_v.set_ylabel("v (m/s)")
+    ax_v.set_title(title or "the safety filter: wanted, sent and true speed")
+    _safety(filtered, np.arange(len(filtered)), ax_why)
+    ax_why.set_xlabel("t (s)")
+    for ax in axes[:, 0]:
+        ax.grid(True, color="0.9", linewidth=0.6)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
     return fig

@@ -49,7 +49,9 @@ CHANNELS = {
                  "where it sent none or sent pot bytes",
     "wanted_twist": "(N, 2) the Twist the controller wanted (v, w; before the safety "
                     "filter), NaN where it wanted none or wanted pot bytes",
-    "safety": "what the safety filter changed in the command, and why ('' where nothing)",
+    "safety": "what the safety filter's rules changed in the command, and why: the speed "
+              "limit, an obstacle, the joystick or a stale command ('' where none did; "
+              "its comfort ramp shows as the gap between wanted_twist and cmd_twist)",
     "flags": "StatusFlags bits",
     "bad_frames": "bad serial frames so far",
     "pose": "(N, 3) ground truth x, y, theta (NaN on a real chair)",

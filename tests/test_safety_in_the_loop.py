@@ -206,3 +206,19 @@ def test_a_stop_is_never_filtered_and_restarts_the_ramp():
     sent = chair.send(Twist(0.6, 0.0))
     assert 0.0 < sent.v < 0.01  # ramping up from standing again
     assert math.isclose(chair.last_command.fb, 128, abs_tol=3)
+
+
+def test_a_stop_asked_for_near_a_wall_is_not_left_to_the_comfort_ramp():
+    """A controller that sees the wall late and asks to stop: the comfort ramp alone
+    would roll the chair over a metre from 0.8 m/s, into the wall; the obstacle stop
+    also guards the way the chair still rolls, so it brakes at once."""
+    def late_stopper(frame):
+        return Twist(0.8, 0.0) if frame.sonar > 0.6 else Twist(0.0, 0.0)
+
+    chair = SimBase("lab", seed=0, start=Pose2D(5.0, 6.0, 0.0), people=False)
+    log = chair.run(late_stopper, 10.0)
+    assert log.collisions[-1] == 0
+    asked = int(np.argmax(log.wanted_twist[:, 0] == 0.0))
+    stopped = np.flatnonzero(np.char.startswith(log.safety, "obstacle"))
+    assert len(stopped) and stopped[0] >= asked  # the stop came while it braked
+    assert (log.cmd_twist[stopped[0]:, 0] == 0.0).all()

@@ -20,8 +20,10 @@ order:
 3. **Speed limits** for a person in the seat (:class:`ComfortLimits`).
 4. **Obstacle stop.** Each range reading (the sonar's cone, the six IR rangers) is put
    in base_link; if it lies in the strip the chair will sweep (its width plus a margin,
-   ahead when driving forward, behind when reversing) nearer than the braking distance
-   at the current speed, the motion along that way is stopped at once. A reading at or
+   ahead when driving forward, behind when reversing: the way it is asked to go, and
+   the way it still rolls while braking) nearer than the braking distance at the
+   current speed, the motion along that way is stopped at once, without the ramp: a
+   stop asked for near something is not left to the comfort ramp either. A reading at or
    below the sensor's minimum range (the MaxSonar reports 0.30 m for anything nearer;
    the IR rangers ``-inf``) says only that something is *at most* that far: from a
    sensor facing within 60 degrees of the way the chair is going, it counts as touching
@@ -71,7 +73,8 @@ from abcwc.params import ChairParams, default_params
 from abcwc.types import SONAR_FRAME, PotCommand, SensorFrame, StatusFlags, Twist
 
 STOP_ON_ARC_ABOVE = 0.02
-"""m/s: above this speed a wanted stop brakes along the present arc (rule 5)."""
+"""m/s: above this speed a wanted stop brakes along the present arc (rule 5), and the way
+the chair still rolls is checked for obstacles (rule 4)."""
 
 
 @dataclass(frozen=True)
@@ -275,7 +278,12 @@ class SafetyFilter:
             self._note("speed limit")
 
         moving = v if abs(v) > abs(self.v) else self.v  # the faster of wanted and present
-        if v != 0.0 and self._obstacle_stop(frame, v, moving):
+        # the ways the chair goes: where it is asked to, and where it still rolls while
+        # the ramp brakes it (a stop wanted near something must not take the comfort ramp)
+        ways = [v] if v != 0.0 else []
+        if abs(self.v) > STOP_ON_ARC_ABOVE and (v == 0.0 or (v > 0) != (self.v > 0)):
+            ways.append(self.v)
+        if any(self._obstacle_stop(frame, way, moving) for way in ways):
             self.v = self.accel = 0.0
             self.w = self._ramp_turn(w, dt)
             return Twist(0.0, self.w)

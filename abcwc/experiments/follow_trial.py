@@ -57,8 +57,8 @@ class FollowResult:
     t: np.ndarray
     distance: np.ndarray  # m, camera to the card (truth)
     seen: np.ndarray  # bool: the tag read in that decision
-    v: np.ndarray  # m/s sent
-    w: np.ndarray  # rad/s sent
+    v: np.ndarray  # m/s sent (after the body's safety filter)
+    w: np.ndarray  # rad/s sent (after the body's safety filter)
     states: list[str] = field(default_factory=list)
     collisions: int = 0
     closest_person: float = math.inf  # m
@@ -113,8 +113,7 @@ def run_follow_trial(seconds: float = 120.0, seed: int = 0, thesis: bool = False
     frame = chair.read()
     every = round(0.1 / chair.period)
     for k in range(round(seconds / chair.period)):
-        command = follower(frame)
-        chair.send(command, follower.decided_at)
+        sent = chair.send(follower(frame), follower.decided_at)  # after the safety filter
         frame = chair.step()
         circles = circles_of(chair.walkers)
         chair_outline = transform_points(chair.pose, outline)
@@ -125,7 +124,7 @@ def run_follow_trial(seconds: float = 120.0, seed: int = 0, thesis: bool = False
             distance = math.hypot(card_target.centre[0] - origin[0],
                                   card_target.centre[1] - origin[1])
             last = follower.log[-1] if follower.log else (0, math.nan, 0, 0, 0, "")
-            rows.append((chair.t, distance, math.isfinite(last[1]), command.v, command.w))
+            rows.append((chair.t, distance, math.isfinite(last[1]), sent.v, sent.w))
             track.append((chair.pose.x, chair.pose.y, chair.pose.theta))
             people.append(circles[:, :2].copy())
     t, distance, seen, v, w = (np.array(c) for c in zip(*rows))

@@ -16,8 +16,9 @@ The ``reference_*`` answers the notebook falls back on are the library's own
 * ``predicted_tight_errors()``: two distances written down *before* both controllers are
   asked for 2 cm: each one's mean final error (m), judged against the run.
 * ``degrees_per_corner(corner_gaps)``: the heading error the worn chair's odometry gains
-  per corner, measured from the corners reached before the chair touched anything, and
-  compared with its geometry (every turn counted about 1.7 % too large).
+  per corner, measured from the corners it reached before the safety filter stopped it
+  at the shelf, and compared with its geometry (every turn counted about 1.7 % too
+  large).
 """
 
 from __future__ import annotations
@@ -232,9 +233,9 @@ def tight_prediction_check(predicted: Callable[[], tuple[float, float]],
            f"predicted ({guess_ttd}, {guess_prop}); both are distances in m, >= 0")
     notes = []
     if guess_ttd < 0.5 * turn_then_drive:
-        notes.append("turn-then-drive cannot stop within 2 cm from 0.5 m/s: it rolls on "
-                     "0.1-0.15 m after its stop command (the paragraph above), so it ends "
-                     "far outside its tolerance")
+        notes.append("turn-then-drive cannot stop within 2 cm from 0.5 m/s: the safety "
+                     "filter brakes it comfortably and it rolls on after its stop command "
+                     "(section 5 measured how far), so it ends far outside its tolerance")
     elif guess_ttd > 3 * turn_then_drive:
         notes.append("turn-then-drive: it overshoots, but it still comes to rest after the "
                      "stop, one roll-out from where it stopped")
@@ -252,17 +253,18 @@ def tight_prediction_check(predicted: Callable[[], tuple[float, float]],
 
 
 @checker("measurement")
-def corner_gain_check(fn: Callable[[list], float], corner_gaps: list, clean: int) -> str:
-    """``fn(corner_gaps)``: degrees of heading error gained per corner, from the first
-    ``clean`` corners of ``corner_gaps`` ((position m, heading rad) at each corner reached,
-    in order) before the chair touched anything; against a straight-line fit here and the
-    worn chair's geometry."""
+def corner_gain_check(fn: Callable[[list], float], corner_gaps: list) -> str:
+    """``fn(corner_gaps)``: degrees of heading error gained per corner, from every corner of
+    ``corner_gaps`` ((position m, heading rad) at each corner reached, in order); against a
+    straight-line fit here and the worn chair's geometry."""
     value = fn(list(corner_gaps))
     expect(isinstance(value, (int, float, np.floating)) and math.isfinite(float(value)),
            f"degrees_per_corner gave {format_value(value)}; return one number of degrees")
     value = float(value)
-    headings = np.degrees([turn for _, turn in corner_gaps[:clean]])
-    slope = float(np.polyfit(np.arange(clean), headings, 1)[0])
+    expect(len(corner_gaps) >= 3, f"{len(corner_gaps)} corners are too few for a line")
+    corners = np.arange(len(corner_gaps))
+    headings = np.degrees([turn for _, turn in corner_gaps])
+    slope, intercept = (float(c) for c in np.polyfit(corners, headings, 1))
     from abcwc.sim import ChairErrors
 
     worn = ChairErrors.worn()
@@ -275,13 +277,14 @@ def corner_gain_check(fn: Callable[[list], float], corner_gaps: list, clean: int
     if abs(value - math.radians(slope)) <= 0.005:
         raise NotYet("that is in radians; the check wants degrees")
     if abs(value - (headings[-1] - headings[0])) <= 0.5:
-        raise NotYet(f"{value:.1f} deg is the gain over all {clean} corners; divide by the "
-                     "number of corners between the first and the last")
-    all_slope = float(np.polyfit(np.arange(len(corner_gaps)),
-                                 np.degrees([turn for _, turn in corner_gaps]), 1)[0])
-    if abs(value - all_slope) <= 0.5:
-        raise NotYet("that takes in the corners after the chair hit the shelf, where the "
-                     "odometry kept counting while the chair stood pinned: use the first "
-                     f"{clean} only")
-    raise NotYet(f"{value:.2f} deg a corner; the first {clean} corners gain {slope:.2f} deg a "
-                 "corner (a straight line through their heading errors)")
+        raise NotYet(f"{value:.1f} deg is the gain over all {len(corner_gaps)} corners; divide "
+                     "by the number of corners between the first and the last")
+    if abs(value - intercept) <= 0.05:
+        raise NotYet("that is the line's intercept, the heading error at the first corner "
+                     "(np.polyfit's second number); the slope is its first")
+    positions = [gap for gap, _ in corner_gaps]
+    if abs(value - float(np.polyfit(corners, positions, 1)[0])) <= 0.02:
+        raise NotYet("that fits the position errors (m), the first of each pair; the heading "
+                     "error (rad) is the second")
+    raise NotYet(f"{value:.2f} deg a corner; a straight line through the heading errors of "
+                 f"the {len(corner_gaps)} corners has another slope")

@@ -13,7 +13,8 @@ in a fresh kernel, one test per code cell:
 
 Kernels start with a fixed environment: this checkout of ``abcwc`` first on the path,
 matplotlib's inline backend (non-interactive; figures still become image/png outputs),
-``PYTHONHASHSEED=0``, and ``ABCWC_PORT=simavr``: a test run never talks to a real chair,
+``PYTHONHASHSEED=0``, OpenBLAS's Haswell kernels on x86-64 (:data:`BLAS_KERNELS`),
+and ``ABCWC_PORT=simavr``: a test run never talks to a real chair,
 and every real-chair cell (:func:`abcwc.hardware_chair`) runs against our firmware on a
 simulated Arduino. Where the AVR toolchain and simavr are missing (outside CI),
 ``ABCWC_PORT`` is removed instead and those cells say they are skipped; under CI
@@ -25,13 +26,26 @@ from __future__ import annotations
 
 import contextlib
 import os
+import platform
 from collections.abc import Iterator
 from pathlib import Path
 
-import pytest
+# OpenBLAS picks its kernels by the CPU, and the kernels round matrix products in
+# different orders (SkylakeX's on an AVX-512 Intel, Haswell's on an AMD): SLAM's loop
+# closures turn those last bits into other decisions (chapter 14's MIT CSAIL crop: 9 loops
+# with Haswell's kernels, 11 with SkylakeX's). The tests and the notebooks' kernels take
+# Haswell's (AVX2, every x86-64 since 2013) on every x86-64 host, so a stored output is the
+# same whichever machine checks it. Set before NumPy loads OpenBLAS, in pytest's own
+# process too (its workers inherit it).
+BLAS_KERNELS = ({"OPENBLAS_CORETYPE": "Haswell"}
+                if platform.machine().lower() in ("x86_64", "amd64") else {})
+for _name, _value in BLAS_KERNELS.items():
+    os.environ.setdefault(_name, _value)
 
-from abcwc.connect import SIMAVR_PORT
-from abcwc.paths import checkout_root
+import pytest  # noqa: E402
+
+from abcwc.connect import SIMAVR_PORT  # noqa: E402
+from abcwc.paths import checkout_root  # noqa: E402
 
 
 def firmware_in_loop_available() -> bool:
@@ -50,6 +64,7 @@ KERNEL_ENV = {
         str(p) for p in (checkout_root(), os.environ.get("PYTHONPATH")) if p),
     # None: removed from the kernel's environment
     "ABCWC_PORT": SIMAVR_PORT if firmware_in_loop_available() else None,
+    **BLAS_KERNELS,
 }
 
 try:

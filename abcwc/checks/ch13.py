@@ -161,7 +161,8 @@ def prediction_check(predicted: Callable[[], int], counted: int) -> str:
 @lru_cache(maxsize=1)
 def survey():
     """The chapter's drive: 90 s of chapter 03's sonar avoider in the lab (seed 13) with
-    the lidar on, and the EKF's poses over it (wheels and gyro, chapter 10)."""
+    the lidar on, through the body's safety filter (as the chair drives), and the EKF's
+    poses over it (wheels and gyro, chapter 10)."""
     from abcwc.behaviours.sonar_avoid import SonarAvoider
     from abcwc.estimation.ekf import ChairEkf, run_ekf
     from abcwc.sim import SimBase

@@ -195,7 +195,10 @@ class RunLog:
         hits = int(collisions[-1]) if collisions is not None else 0
         line = f"{self.t[-1] - self.t[0] + self.period:.1f} s, {driven}, {hits} collisions"
         changed = self.safety_interventions()
-        return line + (f", {changed} commands changed by the safety filter" if changed else "")
+        if not changed:
+            return line
+        commands = "command" if changed == 1 else "commands"
+        return line + f", {changed} {commands} changed by the safety filter"
 
     # ---------------------------------------------------------------- files
     def save(self, path: str | Path) -> Path:

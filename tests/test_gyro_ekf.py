@@ -2,9 +2,10 @@
 
 The acceptance figure, the average NEES over 50 seeded 5-minute drives, takes about two
 minutes, so CI runs 10 drives of 60 s against the 10-run band instead. Measured by hand
-with this set-up and the datasheet gyro: 50 x 300 s gives 2.49, inside the 95 % band
-[2.36, 3.72] (the filter without a bias state, its error spread into the gyro's noise,
-gave 4.74 there: overconfident).
+with this set-up and the datasheet gyro (``abcwc bench nees``, the drives through the
+body's safety filter): 50 x 300 s gives 2.82, inside the 95 % band [2.36, 3.72]
+(before the filter sat in the loop, 2.49; the filter without a bias state, its error
+spread into the gyro's noise, gave 4.74 there: overconfident).
 """
 
 import math

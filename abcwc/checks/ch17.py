@@ -195,8 +195,9 @@ def _distance_not_yet(name: str, median: float, held: float) -> NoReturn:
 def law_check(law: Callable, seconds: float = 30.0) -> str:
     """``law(gap, bearing, receding) -> (v, w)`` driven in :func:`design_scenes`: at
     least 80 % of the tag's readings within 1.0 +- 0.3 m, the median within 0.2 m of
-    1.0, no contact, and a turn that changes sign less than once in four seconds (a
-    proportional turn: 0.07 a second; a fixed rate either way: 0.4). A median more
+    1.0, no contact, and a turn that changes sign less than once in four seconds: the
+    turn sent, after the chair's safety filter (a proportional turn: 0 to 0.13 a second
+    in these scenes; a fixed rate either way: 0.27 and 0.5). A median more
     than 0.2 m off is judged before the turn: a chair that falls behind turns harder at
     every corner, so its chatter is a symptom of the lag, which is what to mend."""
     from abcwc.experiments.follow_trial import run_follow_trial

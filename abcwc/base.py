@@ -45,6 +45,9 @@ class _BodyFilter:
 BODY_FILTER = _BodyFilter()
 """``run(..., safety=BODY_FILTER)`` (the default): commands pass the body's own
 :attr:`~BodyMixin.safety`."""
+SafetyChoice = SafetyFilter | _BodyFilter | None
+"""What ``run`` and ``drive`` take as ``safety``: a filter, the body's own
+(:data:`BODY_FILTER`), or None for the bare chair."""
 
 
 @runtime_checkable
@@ -62,9 +65,9 @@ class Base(Protocol):
     def stop(self) -> None: ...
     def set_speed_cap(self, offset: int) -> None: ...
     def run(self, controller: Controller, seconds: float, progress: bool = False,
-            safety: SafetyFilter | None | _BodyFilter = BODY_FILTER) -> RunLog: ...
+            safety: SafetyChoice = BODY_FILTER) -> RunLog: ...
     def drive(self, command: PotCommand | Twist, seconds: float,
-              safety: SafetyFilter | None | _BodyFilter = BODY_FILTER) -> RunLog: ...
+              safety: SafetyChoice = BODY_FILTER) -> RunLog: ...
     def close(self) -> None: ...
     def log_meta(self) -> dict: ...
 
@@ -158,7 +161,7 @@ class BodyMixin:
             self.safety.stopped()
 
     def run(self, controller: Controller, seconds: float, progress: bool = False,
-            safety: SafetyFilter | None | _BodyFilter = BODY_FILTER) -> RunLog:
+            safety: SafetyChoice = BODY_FILTER) -> RunLog:
         """Call ``controller(frame)`` every period for ``seconds``; send what it returns.
 
         The controller returns a PotCommand, a Twist, or None (send nothing: after
@@ -180,7 +183,7 @@ class BodyMixin:
             self.safety = own
 
     def drive(self, command: PotCommand | Twist, seconds: float,
-              safety: SafetyFilter | None | _BodyFilter = BODY_FILTER) -> RunLog:
+              safety: SafetyChoice = BODY_FILTER) -> RunLog:
         """Send the same command every period for ``seconds`` (through the safety filter
         as :meth:`run` does)."""
         return self.run(lambda frame: command, seconds, safety=safety)

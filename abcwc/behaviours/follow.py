@@ -161,12 +161,12 @@ class TagFollower(BehaviourBase):
             value = getattr(s, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
-        self.clearance = ClearanceCheck(p)  # what the body's safety filter will stop for
+        self.stopping = ClearanceCheck(p)  # what the body's safety filter will stop for
         nav = load_navigation_params()
         local = replace(nav.local_planner, max_vel_x=s.max_speed, min_vel_x=0.0,
                         max_vel_theta=s.max_turn_rate, vx_samples=8, vtheta_samples=21)
         self.planner = DwaPlanner(chair_footprint(p), nav, local, padding=s.padding,
-                                  braking_delay=self.clearance.reaction_time)
+                                  braking_delay=self.stopping.reaction_time)
         self.reset()
 
     def reset(self) -> None:
@@ -326,7 +326,7 @@ class TagFollower(BehaviourBase):
         s = self.settings
         # no faster than can still stop in the gap left, after the chair's reaction time
         # T: v T + v^2 / (2 b) = gap (plus what the person draws away meanwhile)
-        b, lag = s.braking, self.clearance.reaction_time
+        b, lag = s.braking, self.stopping.reaction_time
         stoppable = receding - b * lag + math.sqrt((b * lag) ** 2 + 2 * b * max(gap, 0.0))
         v = min(receding + s.k_gap * gap, stoppable) * max(math.cos(bearing), 0.0)
         return v, s.k_turn * bearing
@@ -369,8 +369,8 @@ class TagFollower(BehaviourBase):
         # what the safety filter will let through: a range sensor seeing something
         # within braking distance ahead stops the wheels but not the turn, and a turn
         # on the spot sweeps the chair's corners where the arc did not
-        gap, _ = self.clearance.clearance(frame, forward=True)
-        stopped = gap <= np.array([self.clearance.braking_distance(max(v, moving[0]))
+        gap, _ = self.stopping.clearance(frame, forward=True)
+        stopped = gap <= np.array([self.stopping.braking_distance(max(v, moving[0]))
                                    for v in samples[:, 0]])
         samples[stopped, 0] = 0.0
         valid = self.planner.check(local, Pose2D(), samples).valid

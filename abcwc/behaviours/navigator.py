@@ -194,7 +194,7 @@ class Navigator(BehaviourBase):
         self.localizer = localizer
         self.places = dict(places or {})
         self.footprint = chair_footprint(p)
-        self.clearance = ClearanceCheck(p)  # what the body's safety filter will stop for
+        self.stopping = ClearanceCheck(p)  # what the body's safety filter will stop for
         nav = load_navigation_params()
         local = replace(nav.local_planner, max_vel_x=s.max_vel_x, min_vel_x=0.0,
                         acc_lim_x=s.acc_lim_x, max_vel_theta=s.max_vel_theta,
@@ -202,8 +202,8 @@ class Navigator(BehaviourBase):
         self.dwa = DwaPlanner(self.footprint, replace(
             nav, move_base=replace(nav.move_base, controller_frequency=s.controller_frequency)),
             local, padding=s.footprint_padding,
-            braking_delay=(self.clearance.reaction_time
-                           + s.acc_lim_x / self.clearance.limits.max_jerk))
+            braking_delay=(self.stopping.reaction_time
+                           + s.acc_lim_x / self.stopping.limits.max_jerk))
         self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
         self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
         self.range_layer = RangeSensorLayer(static_map)
@@ -576,9 +576,9 @@ class Navigator(BehaviourBase):
         self._recoveries += 1
         self._blocked_since = None
         self._anchor = (frame.t, pose)
-        behind, _ = self.clearance.clearance(frame, forward=False)
+        behind, _ = self.stopping.clearance(frame, forward=False)
         back = compose(pose, (-s.back_off_distance, 0.0, 0.0))
-        if (behind > s.back_off_distance + self.clearance.braking_distance(s.back_off_speed)
+        if (behind > s.back_off_distance + self.stopping.braking_distance(s.back_off_speed)
                 and self._footprint_free([back])):
             self._recovery = ("backing off", frame.t, pose)
         elif self._footprint_free([compose(pose, (0.0, 0.0, side * k * math.pi / 12))

@@ -34,9 +34,8 @@ from __future__ import annotations
 
 import os
 
-from abcwc.base import BODY_FILTER, BodyMixin, Controller, _BodyFilter
+from abcwc.base import BODY_FILTER, BodyMixin, Controller, SafetyChoice
 from abcwc.control.interface_board import check_speed_cap
-from abcwc.control.safety import SafetyFilter
 from abcwc.hw import protocol as P
 from abcwc.hw.link import (
     STALL_LIMIT,
@@ -136,7 +135,7 @@ class LinkedBody(BodyMixin):
         self.link.set_speed_cap(offset)
 
     def run(self, controller: Controller, seconds: float, progress: bool = False,
-            safety: SafetyFilter | None | _BodyFilter = BODY_FILTER) -> RunLog:
+            safety: SafetyChoice = BODY_FILTER) -> RunLog:
         """Call ``controller(frame)`` every period for ``seconds``; send what it returns
         through the safety filter (:meth:`abcwc.base.BodyMixin.run`).
 

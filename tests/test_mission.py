@@ -21,6 +21,7 @@ from abcwc.behaviours import (
     mission_timeline,
 )
 from abcwc.control import joystick_adc_to_pot_byte
+from abcwc.geometry import wrap_angle
 from abcwc.log import LogRecorder, RunLog
 from abcwc.sim import SimBase
 from abcwc.sim.world import world_from_dict
@@ -93,6 +94,7 @@ def test_a_button_and_a_map_click_take_the_chair_there():
     _assert_arrived(chair, mission, chair.world.places["centre"])
     click = (8.0, 6.0)
     mission.go_to(click, reason="map click")
+    assert mission.goal == Pose2D(8.0, 6.0, 0.0)
     _run(chair, mission, 40)
     _assert_arrived(chair, mission, click)
     assert [tr.reason for tr in mission.transitions if tr.after is MissionState.NAVIGATING] \
@@ -146,6 +148,30 @@ def test_stop_ends_the_errand_and_the_chair_stands():
     assert math.hypot(chair.pose.x - still.x, chair.pose.y - still.y) < 1e-3
 
 
+def test_follow_me_hands_the_chair_to_the_follower_and_stop_ends_it():
+    from abcwc.behaviours.follow import TagFollower
+    from abcwc.estimation.gyro import GyroOdometry
+    from abcwc.geometry import compose
+    from tests.test_follow import standing_person_world
+
+    chair = SimBase(standing_person_world(2.5), seed=12, lidar=True, camera="gray")
+    follower = TagFollower(chair.walkers[0].spec.tag, GyroOdometry(params=chair.params),
+                           chair.params)
+    mission = Mission.for_world(chair.world, chair=chair, follower=follower)
+    mission.command("follow me")
+    assert mission.state is MissionState.FOLLOWING and mission.goal is None
+    _run(chair, mission, 12.0)
+    assert mission.state is MissionState.FOLLOWING, mission.reason
+    tag = chair.walkers[0].tag_target()
+    camera = compose(chair.pose, chair.params.depth_scan.mount)[:2]
+    assert math.hypot(tag.centre[0] - camera[0], tag.centre[1] - camera[1]) == pytest.approx(
+        1.0, abs=0.1)  # the follower's distance: it drove
+    mission.command("stop")
+    assert mission.state is MissionState.IDLE and not follower.running
+    assert [tr.reason for tr in mission.transitions] == [
+        'typed "follow me": following the person ahead', 'typed "stop"']
+
+
 # ------------------------------------------------------------------ events
 
 
@@ -197,6 +223,7 @@ def _override_and_resume(chair, mission: Mission, place: str) -> None:
     chair.set_joystick(fb=pulled)
     frame, reversed_from = chair.step(), chair.pose
     assert frame.flags & StatusFlags.JOYSTICK_OVERRIDE
+    assert frame.pot_fb == joystick_adc_to_pot_byte(pulled)  # the pots follow at once
     command = mission(frame)
     assert command == Twist(0.0, 0.0)  # in the first period whose frame says so
     assert mission.state is MissionState.MANUAL_OVERRIDE
@@ -292,17 +319,31 @@ def test_a_lost_chair_stops_finds_its_place_and_completes_the_errand():
 
 
 def test_a_chair_that_cannot_find_its_place_fails_with_the_reason():
-    """Carried 5 m away into another room: beyond the search's reach, the mission fails
-    saying so, standing still; nothing is raised."""
+    """Carried 5 m away into another room: it stops, turns on the spot between
+    searches, and, the place beyond the search's reach, fails saying so; nothing is
+    raised."""
     chair = SimBase("floor", seed=10, lidar=True, people=False)
     mission = Mission.for_world(chair.world)
     mission.go_to((16.0, 9.0))
     _run(chair, mission, 4, until=())
     _kidnap(chair, 3.0, 4.0, 1.0)
-    _run(chair, mission, 40)
+    frame, phases, stopped = chair.read(), set(), None
+    for _ in range(round(40 / chair.period)):
+        chair.send(mission(frame), mission.decided_at)
+        frame = chair.step()
+        phase = mission.navigator.feedback.phase
+        phases.add(phase)
+        if stopped is None and phase == "turning to re-localise":
+            stopped = chair.pose  # where it stood when it first turned
+        if mission.state in ENDED:
+            break
     assert mission.state is MissionState.FAILED
-    assert mission.reason.startswith("lost:")
+    assert mission.reason.startswith("lost:") and "turning on the spot" in mission.reason
     assert MissionState.LOCALISING in [tr.after for tr in mission.transitions]
+    assert {"relocalising", "turning to re-localise"} <= phases
+    truth = chair.pose  # it stopped, then turned on the spot
+    assert math.hypot(truth.x - stopped.x, truth.y - stopped.y) < 0.05
+    assert abs(wrap_angle(truth.theta - stopped.theta)) > 0.5
     assert chair.collisions == 0
 
 

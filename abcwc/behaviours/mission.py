@@ -19,7 +19,8 @@ gives control back the moment the joystick moves (the thesis's concept, its figu
   ``mission_event`` (the events fired).
 * **Lost localisation** is a state, not a crash: when the navigator's localiser says the
   scans no longer fit the map, the mission is *localising* while the navigator stops,
-  turns on the spot and searches for the chair's place on the map; found, it goes on
+  turns on the spot (:data:`RELOCALISE_TURN` between searches) and searches for the
+  chair's place on the map; found, it goes on
   with the errand; not found within the navigator's patience, the mission has *failed*
   with the reason.
 * **A way blocked** by something the map does not have (a cupboard in a corridor): when
@@ -74,6 +75,10 @@ MIN_BLOCKING_CELLS = 10
 """Cells of the navigator's map (5 cm) the scan must newly mark off the map, while the
 navigator waits for the way to clear, for the mission to plan round them for the rest of
 the errand: half a metre of wall, not the odd noisy return."""
+RELOCALISE_TURN = math.pi / 6
+"""rad the chair turns on the spot between searches for its place when lost: the
+navigator's ``relocalise_turn`` in :meth:`Mission.for_world` and :meth:`Mission.for_map`
+(its own default stands still, as its chapter shows it)."""
 RELOCALISING_PHASES = ("relocalising", "turning to re-localise")
 """The navigator's phases while it searches for the chair's place (it stands or turns)."""
 
@@ -166,7 +171,8 @@ class Mission(BehaviourBase):
         self.reason = "waiting for a command"
         self.transitions: list[Transition] = []
         self.events_fired: list[MissionEvent] = []
-        self.goal: str | Pose2D | None = None
+        self.goal: str | Pose2D | None = None  # a place, or a point (a click's heading: 0)
+        self._goal_label = "nowhere"
         self._subscribers: list[Callable[[MissionEvent], None]] = []
         self._now = 0.0
         self._active: Behaviour | None = None  # the navigator or the follower, on an errand
@@ -183,12 +189,15 @@ class Mission(BehaviourBase):
                   settings: NavigatorSettings | None = None) -> Mission:
         """A mission on a simulated world's walls and places (a :class:`World` or a
         world's name or file), for ``chair`` (its parameters; default the house chair),
-        starting at ``start`` (a pose or a place; default the world's start)."""
+        starting at ``start`` (a pose or a place; default the world's start); the
+        navigator's ``settings`` default to its own with ``relocalise_turn`` set to
+        :data:`RELOCALISE_TURN`."""
         if isinstance(world, str):
             from abcwc.sim.world import load_world
 
             world = load_world(world)
         params = chair.params if chair is not None else None
+        settings = settings or NavigatorSettings(relocalise_turn=RELOCALISE_TURN)
         navigator = Navigator.for_world(world, start, params, settings=settings)
         return cls(navigator, follower, events=events, params=params)
 
@@ -198,7 +207,9 @@ class Mission(BehaviourBase):
                 follower: Behaviour | None = None, events: Sequence[PlaceEvent] | None = None,
                 settings: NavigatorSettings | None = None) -> Mission:
         """A mission on a built map (trinary ``cells`` on ``grid``, as
-        :meth:`Navigator.for_map`) with the named ``places`` (m, rad), from ``start``."""
+        :meth:`Navigator.for_map`) with the named ``places`` (m, rad), from ``start``;
+        ``settings`` as :meth:`for_world`."""
+        settings = settings or NavigatorSettings(relocalise_turn=RELOCALISE_TURN)
         navigator = Navigator.for_map(cells, grid, start, params, settings=settings)
         navigator.places = dict(places)
         return cls(navigator, follower, events=events, params=params)
@@ -235,8 +246,10 @@ class Mission(BehaviourBase):
         goal, label = self._destination(destination)
         self._revive()
         self._end_errand()
-        self.goal = goal
-        self.navigator.go_to(goal if not isinstance(goal, tuple) else goal)
+        # a click's (x, y) reaches the navigator as it is: any heading will do there
+        self.goal = Pose2D(*goal) if isinstance(goal, tuple) else goal
+        self._goal_label = label
+        self.navigator.go_to(goal)
         self._active = self.navigator
         if not self.navigator.running:  # off the map, in a wall, no path: at once
             self._active = None
@@ -359,16 +372,6 @@ class Mission(BehaviourBase):
             raise ValueError(f"{allowed}, got {destination!r}")
         return (x, y), f"({x:.2f}, {y:.2f}) m"
 
-    def _label(self) -> str:
-        goal = self.goal
-        if isinstance(goal, str):
-            return f"the {place_phrase(goal)}"
-        if isinstance(goal, Pose2D):
-            return f"({goal.x:.2f}, {goal.y:.2f}) m"
-        if goal is not None:
-            return f"({goal[0]:.2f}, {goal[1]:.2f}) m"
-        return "nowhere"
-
     def _revive(self) -> None:
         """A command after :meth:`cancel` starts the mission again."""
         if not self.running:
@@ -386,7 +389,7 @@ class Mission(BehaviourBase):
 
     def _after_navigator(self, command: Twist) -> Twist:
         """The mission's state from the navigator's: arrived, failed, lost, waiting."""
-        nav, label = self.navigator, self._label()
+        nav, label = self.navigator, self._goal_label
         if not nav.running:
             self._active = None
             if nav.failure is None:

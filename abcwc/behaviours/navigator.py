@@ -19,8 +19,9 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
 4. **slows down** for the goal (no faster than it can stop from half-way into the
    tolerance), **turns to the goal's heading** once within ``xy_goal_tolerance``, and
    succeeds within ``yaw_goal_tolerance``, standing still;
-5. **re-localises** when the localiser is lost: it stops, searches round its estimate
-   for where the scan fits the map, and turns on the spot a little between searches;
+5. **re-localises** when the localiser is lost: it stops and searches round its
+   estimate for where the scan fits the map (with ``relocalise_turn`` set, as the
+   mission layer sets it, turning on the spot a little between searches);
 6. **recovers** when no safe trajectory is left or the chair has not moved
    ``oscillation_distance`` in ``oscillation_timeout`` s (move_base's oscillation
    check): it waits ``controller_patience`` s for the way to clear (people move), then
@@ -152,7 +153,7 @@ class NavigatorSettings:
     range_mark_wall_distance: float = 0.25  # m: sonar/IR marks this near a map wall are it
     range_mark_decay: float = 1.0  # s: time constant of the sonar/IR marks' fading
     relocalise_patience: float = 10.0  # s of searching for the chair's place when lost
-    relocalise_turn: float = math.pi / 6  # rad turned on the spot between searches when lost
+    relocalise_turn: float | None = None  # rad turned on the spot between searches when lost
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.15  # m/s
     max_recoveries: int = 4
@@ -382,20 +383,16 @@ class Navigator(BehaviourBase):
 
     def _relocalise(self, frame: SensorFrame) -> Twist:
         """Lost: stand still and search round the estimate for where the scan fits the
-        map (:meth:`MapLocalizer.recover`); after each search that finds nothing, turn a
-        twelfth of a turn on the spot (``relocalise_turn``) where the newest scan shows
-        room for it, so the next search sees other walls (a corridor that fits many
-        places along it, a person hiding the walls), then stand and search again. Fail
-        after ``relocalise_patience`` s without a place."""
+        map (:meth:`MapLocalizer.recover`), once a second; with ``relocalise_turn`` set,
+        after each search that finds nothing, once the chair stands, turn that far on
+        the spot (left) where the
+        newest scan shows room for it, so the next search sees other walls (a corridor
+        that fits many places along it, a person hiding the walls). Fail after
+        ``relocalise_patience`` s without a place."""
         s = self.settings
         if self._lost_since is None:
             self._lost_since, self._next_search = frame.t, frame.t
             self._turn_until = -math.inf
-        if frame.t - self._lost_since > s.relocalise_patience:
-            self.fail("lost: the scans no longer fit the map where the chair thinks it is, "
-                      f"and no place within reach fits them either "
-                      f"({s.relocalise_patience:.0f} s of searching, turning on the spot)")
-            return Twist(0.0, 0.0)
         if frame.t < self._turn_until:
             self._phase = "turning to re-localise"
             return Twist(0.0, s.in_place_turn_rate)
@@ -408,10 +405,17 @@ class Navigator(BehaviourBase):
                 self._next_plan = -math.inf  # plan again from where the chair really is
                 self._anchor = (frame.t, self.localizer.pose)
                 return Twist(0.0, 0.0)
-            if self._room_to_turn(frame, s.relocalise_turn):
+            standing = abs(self.localizer.velocity[0]) < 0.05  # stop first, then turn
+            if (s.relocalise_turn is not None and standing
+                    and self._room_to_turn(frame, s.relocalise_turn)):
                 self._turn_until = frame.t + s.relocalise_turn / s.in_place_turn_rate
                 # search again once the turn is done and a scan has been taken standing
                 self._next_search = self._turn_until + 0.5
+        if frame.t - self._lost_since > s.relocalise_patience:
+            turning = ", turning on the spot" if s.relocalise_turn is not None else ""
+            self.fail("lost: the scans no longer fit the map where the chair thinks it is, "
+                      f"and no place within reach fits them either "
+                      f"({s.relocalise_patience:.0f} s of searching{turning})")
         return Twist(0.0, 0.0)
 
     def _room_to_turn(self, frame: SensorFrame, angle: float) -> bool:

@@ -323,9 +323,9 @@ class Mission(BehaviourBase):
             self.navigator.observe(frame)
             command = self._active(frame)
             if not self._active.running:
-                failure = self._active.failure
+                ended = self._active.failure or self._active.status.value
                 self._active = None
-                self._transition(MissionState.FAILED, f"stopped following: {failure}")
+                self._transition(MissionState.FAILED, f"stopped following: {ended}")
         else:
             self.navigator.observe(frame)
             command = Twist(0.0, 0.0)

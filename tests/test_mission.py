@@ -7,8 +7,10 @@ reason; bad input is refused with what is allowed."""
 
 from __future__ import annotations
 
+import json
 import math
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,7 +26,7 @@ from abcwc.control import joystick_adc_to_pot_byte
 from abcwc.geometry import wrap_angle
 from abcwc.log import LogRecorder, RunLog
 from abcwc.sim import SimBase
-from abcwc.sim.world import world_from_dict
+from abcwc.sim.world import World, world_from_dict
 from abcwc.types import Pose2D, StatusFlags, Twist
 
 UNDER_CI = os.environ.get("CI", "").lower() == "true"
@@ -350,7 +352,7 @@ def test_a_chair_that_cannot_find_its_place_fails_with_the_reason():
 # ------------------------------------------------------------------ a blocked corridor
 
 
-def _blocked_worlds(loop: bool, tmp_path) -> tuple[object, object]:
+def _blocked_worlds(loop: bool, tmp_path: Path) -> tuple[World, Path]:
     """A corridor 12 m long and 2 m wide, from ``start`` to ``end``, blocked half-way by
     something the map does not have; with ``loop``, a second corridor joins its ends
     round a block 8 x 3 m. (The map the chair has, the world as it is.)"""
@@ -362,7 +364,7 @@ def _blocked_worlds(loop: bool, tmp_path) -> tuple[object, object]:
     known = {"name": "known", "walls": walls, "places": places}
     actual = {"name": "blocked", "walls": walls + [[[6, 0], [6, 2]]], "places": places}
     path = tmp_path / "blocked.json"
-    path.write_text(__import__("json").dumps(actual))
+    path.write_text(json.dumps(actual))
     return world_from_dict(known), path
 
 

@@ -467,3 +467,71 @@ def test_the_timeline_reads_the_state_channel():
     assert mission_timeline(RunLog(t=t[:0], mission_state=states[:0])) == []
     with pytest.raises(ValueError, match="no 'mission_state' channel"):
         mission_timeline(RunLog(t=t))
+
+
+# ------------------------------------------------------------------ the rule
+
+
+def test_the_rule_is_a_pure_function_of_the_state_and_the_situation():
+    from abcwc.behaviours import Situation, Status, next_state
+
+    st = MissionState
+    running = Situation(status=Status.RUNNING, goal="the lift")
+    held = Situation(joystick=True, command="go to", asked="button")
+    assert next_state(st.NAVIGATING, held)[0] is st.MANUAL_OVERRIDE  # the hand first
+    assert next_state(st.MANUAL_OVERRIDE, held) is None
+    assert next_state(st.MANUAL_OVERRIDE, Situation()) is None  # released: it stays
+    assert next_state(st.MANUAL_OVERRIDE, Situation(command="go to", asked="button",
+                                                    goal="the lift", status=Status.RUNNING)) \
+        == (st.NAVIGATING, "button: going to the lift")
+    assert next_state(st.NAVIGATING, running) is None
+    lost = Situation(status=Status.RUNNING, lost=True)
+    assert next_state(st.NAVIGATING, lost)[0] is st.LOCALISING
+    assert next_state(st.LOCALISING, lost) is None
+    assert next_state(st.LOCALISING, running)[0] is st.NAVIGATING
+    waiting = Situation(status=Status.RUNNING, waiting=True)
+    assert next_state(st.NAVIGATING, waiting)[0] is st.WAITING
+    assert next_state(st.WAITING, waiting) is None
+    assert next_state(st.WAITING, Situation(status=Status.RUNNING, waiting=True,
+                                            blocked=True))[1].startswith("the way is blocked")
+    assert next_state(st.WAITING, running)[1].startswith("the way is clear")
+    assert next_state(st.NAVIGATING, Situation(status=Status.FAILED, failure="stuck")) \
+        == (st.FAILED, "stuck")
+    assert next_state(st.IDLE, Situation(status=Status.RUNNING, lost=True)) is None
+    with pytest.raises(ValueError, match="go to, follow, stop"):
+        Situation(command="fly")
+
+
+def test_a_different_rule_drives_the_same_mission():
+    """A rule that takes the errand up again when the joystick is let go: the mission
+    starts the navigator again to the same goal, and the chair drives there."""
+    from abcwc.behaviours import next_state
+
+    def resumes(state, situation):
+        if state is MissionState.MANUAL_OVERRIDE and not situation.joystick:
+            return MissionState.NAVIGATING, "released: going on"
+        return next_state(state, situation)
+
+    chair = SimBase("lab", seed=8, lidar=True, people=False)
+    mission = Mission.for_world(chair.world, rules=resumes)
+    mission.go_to("centre")
+    _run(chair, mission, 2, until=())
+    chair.set_joystick(fb=chair.params.joystick_centre - 60)
+    _run(chair, mission, 0.5, until=())
+    chair.release_joystick()
+    _run(chair, mission, 40)
+    _assert_arrived(chair, mission, chair.world.places["centre"])
+    assert [tr.reason for tr in mission.transitions][1:3] == [
+        "the joystick moved: the rider drives; the errand is paused until a new command",
+        "released: going on"]
+
+
+def test_a_rule_that_answers_something_else_is_refused_with_what_is_allowed():
+    chair = SimBase("lab", seed=0, people=False)
+    for answer in ("navigating", (MissionState.IDLE, ""), ("flying", "up"), 3):
+        mission = Mission.for_world(chair.world,
+                                    rules=lambda state, situation, answer=answer: answer)
+        with pytest.raises(ValueError, match=r"returns None \(stay\) or \(state, reason\)"):
+            mission.go_to("centre")
+    with pytest.raises(ValueError, match="rules is a function"):
+        Mission.for_world(chair.world, rules="next_state")

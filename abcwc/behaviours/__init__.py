@@ -24,8 +24,10 @@ from abcwc.behaviours.mission import (
     MissionEvent,
     MissionState,
     PlaceEvent,
+    Situation,
     Transition,
     mission_timeline,
+    next_state,
 )
 from abcwc.behaviours.sonar_avoid import SonarAvoider
 from abcwc.behaviours.square import SquareDriver
@@ -33,6 +35,6 @@ from abcwc.behaviours.waypoints import FollowWaypoints, GroundTruth, floor_mixed
 
 __all__ = ["LIFT_REQUESTED", "LOOP_RATE_HZ", "Behaviour", "BehaviourBase", "FollowWaypoints",
            "GoToLandmark", "GoalBehaviour", "GroundTruth", "Mission", "MissionEvent",
-           "MissionState", "PlaceEvent", "PoseEstimator", "SonarAvoider", "SquareDriver",
-           "Status", "ThesisGoToLandmark", "Transition", "distance_and_bearing",
-           "floor_mixed_drive", "mission_timeline"]
+           "MissionState", "PlaceEvent", "PoseEstimator", "Situation", "SonarAvoider",
+           "SquareDriver", "Status", "ThesisGoToLandmark", "Transition",
+           "distance_and_bearing", "floor_mixed_drive", "mission_timeline", "next_state"]

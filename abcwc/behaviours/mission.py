@@ -39,6 +39,19 @@ gives control back the moment the joystick moves (the thesis's concept, its figu
   a stop (the pots follow the joystick), and after the release it stays there, still,
   until a new command. It never resumes by itself.
 
+**The decision and the actions are apart.** When the state changes is one pure function,
+the *rule* :func:`next_state` ``(state, situation) -> (new state, reason) | None``, of
+what the mission sees (:class:`Situation`: the joystick deflected, a new command, the
+errand's status, the localiser lost, the navigator waiting, the way blocked). The
+:class:`Mission` gathers the situation, asks the rule, logs the transition, and acts:
+it runs the behaviour the state asks for and only it (the navigator while navigating,
+localising or waiting, the follower while following, none otherwise; a stopped one is
+started again), plans round the blocking cells when the rule says navigate on a blocked
+way, sends the command the state allows, and fires the events. A different rule
+(``Mission(..., rules=my_next_state)``) drives the same mission: the course's chapter 18
+has students write it. :meth:`~Mission.cancel` and :meth:`~Mission.reset` end the
+mission whatever the rule says.
+
 A mission decides every control period (50 Hz), so the joystick is seen at once; it
 never succeeds on its own and runs until :meth:`~Mission.cancel`. It does not apply the
 safety filter: the body's control loop passes every command through it.
@@ -54,7 +67,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from abcwc.behaviours.base import Behaviour, BehaviourBase, positive_number
+from abcwc.behaviours.base import Behaviour, BehaviourBase, Status, positive_number
 from abcwc.behaviours.navigator import Navigator, NavigatorSettings
 from abcwc.behaviours.voice import understood
 from abcwc.control.safety import joystick_overrides
@@ -135,6 +148,106 @@ class MissionEvent:
 LIFT_REQUESTED = PlaceEvent("lift requested", "lift")
 """The default event of a world with a place called "lift"."""
 
+ERRAND_STATES = (MissionState.NAVIGATING, MissionState.LOCALISING, MissionState.WAITING)
+"""The states in which the navigator drives the errand."""
+COMMANDS = ("go to", "follow", "stop")
+"""The commands a :class:`Situation` can carry."""
+
+
+@dataclass(frozen=True)
+class Situation:
+    """What the mission sees when it decides: in a control period, or at a command.
+
+    * ``joystick``: the frame says the joystick drives (the rider's hand);
+    * ``command``: a new command at this moment, one of :data:`COMMANDS` ("go to",
+      "follow", "stop"), or None;
+    * ``asked``: who gave it and how, the start of a reason ('typed "stop"', "button");
+    * ``goal``: the errand's goal as a person reads it ("the lift", "(8.00, 6.00) m");
+    * ``status``: the errand's behaviour's :class:`~abcwc.behaviours.base.Status` (the
+      navigator's or the follower's; after a "go to", whether the navigator could
+      start), None with no errand;
+    * ``failure``: why it failed, when its status is failed;
+    * ``lost``: the localiser says the scans no longer fit the map;
+    * ``waiting``: the navigator waits for the way to clear;
+    * ``blocked``: while it waits, the scan marks at least :data:`MIN_BLOCKING_CELLS`
+      of the way that the map does not have (people left out): planning round it
+      may help.
+    """
+
+    joystick: bool = False
+    command: str | None = None
+    asked: str = ""
+    goal: str = ""
+    status: Status | None = None
+    failure: str | None = None
+    lost: bool = False
+    waiting: bool = False
+    blocked: bool = False
+
+    def __post_init__(self) -> None:
+        if self.command is not None and self.command not in COMMANDS:
+            raise ValueError(f"a situation's command is one of {', '.join(COMMANDS)} or "
+                             f"None, got {self.command!r}")
+
+
+Rule = Callable[[MissionState, Situation], "tuple[MissionState, str] | None"]
+"""A mission's rule: ``(state, situation) -> (new state, reason)``, or None to stay."""
+
+
+def next_state(state: MissionState, situation: Situation) -> tuple[MissionState, str] | None:
+    """The mission's transitions: the new state and the reason for it, or None (stay).
+
+    In this order: the joystick wins (manual override, where the mission stays while the
+    joystick is held and after, until a new command); a command is obeyed ("stop":
+    idle; "follow": following; "go to": navigating, or failed if the navigator cannot
+    start); a follower that ends has failed; on an errand, the navigator's end is
+    arrived or failed, a lost localiser is localising until the chair's place is found,
+    and a wait is waiting, left to navigate round what blocks the way when the scan
+    shows it, or when the way clears.
+    """
+    s, st = situation, MissionState
+    if s.joystick:
+        if state is st.MANUAL_OVERRIDE:
+            return None
+        return (st.MANUAL_OVERRIDE, "the joystick moved: the rider drives; the errand is "
+                                    "paused until a new command")
+    if s.command == "stop":
+        return st.IDLE, s.asked
+    if s.command == "follow":
+        return st.FOLLOWING, f"{s.asked}: following the person ahead"
+    if s.command == "go to":
+        if s.status is Status.FAILED:
+            return st.FAILED, f"{s.asked}: cannot go to {s.goal}: {s.failure}"
+        return st.NAVIGATING, f"{s.asked}: going to {s.goal}"
+    if state is st.FOLLOWING:
+        if s.status is Status.RUNNING:
+            return None
+        ended = s.failure or (s.status.value if s.status is not None else "no follower")
+        return st.FAILED, f"stopped following: {ended}"
+    if state not in ERRAND_STATES:
+        return None
+    if s.status is Status.SUCCEEDED:
+        return st.ARRIVED, f"arrived at {s.goal}"
+    if s.status is Status.FAILED:
+        return st.FAILED, s.failure or "the navigator failed"
+    if s.lost:
+        if state is st.LOCALISING:
+            return None
+        return (st.LOCALISING, "lost: the scans no longer fit the map; stopping to turn "
+                               "and find the chair's place on the map")
+    if state is st.LOCALISING:
+        return st.NAVIGATING, f"found the chair's place on the map: going on to {s.goal}"
+    if s.waiting:
+        if state is st.NAVIGATING:
+            return st.WAITING, "waiting for the way to clear"
+        if s.blocked:
+            return (st.NAVIGATING, "the way is blocked by something the map does not "
+                                   f"have: planning round it to {s.goal}")
+        return None
+    if state is st.WAITING:
+        return st.NAVIGATING, f"the way is clear: going on to {s.goal}"
+    return None
+
 
 class Mission(BehaviourBase):
     """Errands on a :class:`~abcwc.behaviours.navigator.Navigator` (module notes).
@@ -142,17 +255,22 @@ class Mission(BehaviourBase):
     ``follower`` (a tag follower) makes "follow me" possible; ``commands`` is the voice
     grammar (default: the house set for the navigator's places); ``events`` the events
     near places (default: :data:`LIFT_REQUESTED` if there is a place "lift"; ``()`` for
-    none); ``params`` the chair's (default: the navigator's). Most callers build it with
-    :meth:`for_world` or :meth:`for_map`.
+    none); ``params`` the chair's (default: the navigator's); ``rules`` the transitions
+    (default: :func:`next_state`). Most callers build it with :meth:`for_world` or
+    :meth:`for_map`.
     """
 
     def __init__(self, navigator: Navigator, follower: Behaviour | None = None,
                  commands: CommandSet | None = None,
                  events: Sequence[PlaceEvent] | None = None,
-                 params: ChairParams | None = None) -> None:
+                 params: ChairParams | None = None, rules: Rule = next_state) -> None:
         super().__init__()  # every period: the joystick must be seen at once
         if not isinstance(navigator, Navigator):
             raise ValueError(f"a mission needs a Navigator, got {type(navigator).__name__}")
+        if not callable(rules):
+            raise ValueError("rules is a function (state, situation) -> (state, reason) | "
+                             f"None, got {rules!r}")
+        self.rules = rules
         self.navigator = navigator
         self.follower = follower
         self.params = params or navigator.params
@@ -172,7 +290,11 @@ class Mission(BehaviourBase):
         self.transitions: list[Transition] = []
         self.events_fired: list[MissionEvent] = []
         self.goal: str | Pose2D | None = None  # a place, or a point (a click's heading: 0)
+        self._navigator_goal: str | Pose2D | tuple[float, float] | None = None  # as given
         self._goal_label = "nowhere"
+        self._joystick = False  # the newest frame's
+        self._blocking: np.ndarray | None = None  # the cells that block the way, waiting
+        self._blocking_from: tuple[object, int] | None = None  # from: local costmap, avoided
         self._subscribers: list[Callable[[MissionEvent], None]] = []
         self._now = 0.0
         self._active: Behaviour | None = None  # the navigator or the follower, on an errand
@@ -186,12 +308,13 @@ class Mission(BehaviourBase):
     def for_world(cls, world: World | str, chair: Base | None = None,
                   start: Pose2D | str | None = None, follower: Behaviour | None = None,
                   events: Sequence[PlaceEvent] | None = None,
-                  settings: NavigatorSettings | None = None) -> Mission:
+                  settings: NavigatorSettings | None = None,
+                  rules: Rule = next_state) -> Mission:
         """A mission on a simulated world's walls and places (a :class:`World` or a
         world's name or file), for ``chair`` (its parameters; default the house chair),
         starting at ``start`` (a pose or a place; default the world's start); the
         navigator's ``settings`` default to its own with ``relocalise_turn`` set to
-        :data:`RELOCALISE_TURN`."""
+        :data:`RELOCALISE_TURN`; ``rules`` the transitions (:func:`next_state`)."""
         if isinstance(world, str):
             from abcwc.sim.world import load_world
 
@@ -199,20 +322,21 @@ class Mission(BehaviourBase):
         params = chair.params if chair is not None else None
         settings = settings or NavigatorSettings(relocalise_turn=RELOCALISE_TURN)
         navigator = Navigator.for_world(world, start, params, settings=settings)
-        return cls(navigator, follower, events=events, params=params)
+        return cls(navigator, follower, events=events, params=params, rules=rules)
 
     @classmethod
     def for_map(cls, cells: np.ndarray, grid: GridGeometry, start: Pose2D,
                 places: dict[str, Pose2D], params: ChairParams | None = None,
                 follower: Behaviour | None = None, events: Sequence[PlaceEvent] | None = None,
-                settings: NavigatorSettings | None = None) -> Mission:
+                settings: NavigatorSettings | None = None,
+                rules: Rule = next_state) -> Mission:
         """A mission on a built map (trinary ``cells`` on ``grid``, as
         :meth:`Navigator.for_map`) with the named ``places`` (m, rad), from ``start``;
         ``settings`` as :meth:`for_world`."""
         settings = settings or NavigatorSettings(relocalise_turn=RELOCALISE_TURN)
         navigator = Navigator.for_map(cells, grid, start, params, settings=settings)
         navigator.places = dict(places)
-        return cls(navigator, follower, events=events, params=params)
+        return cls(navigator, follower, events=events, params=params, rules=rules)
 
     # ------------------------------------------------------------------ inputs
     def command(self, text_or_spoken: str | SpokenCommand) -> SpokenCommand:
@@ -248,15 +372,10 @@ class Mission(BehaviourBase):
         self._end_errand()
         # a click's (x, y) reaches the navigator as it is: any heading will do there
         self.goal = Pose2D(*goal) if isinstance(goal, tuple) else goal
-        self._goal_label = label
-        self.navigator.go_to(goal)
+        self._navigator_goal, self._goal_label = goal, label
+        self.navigator.go_to(goal)  # off the map, in a wall, no path: it fails at once
         self._active = self.navigator
-        if not self.navigator.running:  # off the map, in a wall, no path: at once
-            self._active = None
-            self._transition(MissionState.FAILED,
-                             f"{reason}: cannot go to {label}: {self.navigator.failure}")
-            return
-        self._transition(MissionState.NAVIGATING, f"{reason}: going to {label}")
+        self._decide(self._situation("go to", reason))
 
     def follow(self, reason: str = "asked") -> None:
         """Follow the person ahead (the follower's tag). ``ValueError`` without a
@@ -265,17 +384,17 @@ class Mission(BehaviourBase):
             raise ValueError("following needs a follower: Mission(navigator, follower=...)")
         self._revive()
         self._end_errand()
-        self.goal = None
+        self.goal = self._navigator_goal = None
         self.follower.reset()
         self._active = self.follower
-        self._transition(MissionState.FOLLOWING, f"{reason}: following the person ahead")
+        self._decide(self._situation("follow", reason))
 
     def stop(self, reason: str = "stop pressed") -> None:
         """End the errand and stand still (idle)."""
         self._revive()
-        self._end_errand()
-        self.goal = None
-        self._transition(MissionState.IDLE, reason)
+        self._decide(self._situation("stop", reason))
+        if self.state is MissionState.IDLE:
+            self.goal = self._navigator_goal = None
 
     def subscribe(self, callback: Callable[[MissionEvent], None]) -> None:
         """Call ``callback(event)`` for every :class:`MissionEvent` from now on."""
@@ -307,30 +426,21 @@ class Mission(BehaviourBase):
             self.navigator.observe(frame)
 
     def update(self, frame: SensorFrame) -> Twist:
-        """One period: the joystick first, then the errand, then the events."""
-        if joystick_overrides(frame):
-            if self.state is not MissionState.MANUAL_OVERRIDE:
-                self._end_errand()
-                self._transition(MissionState.MANUAL_OVERRIDE,
-                                 "the joystick moved: the rider drives; the errand is "
-                                 "paused until a new command")
-            self.navigator.observe(frame)
-            command = Twist(0.0, 0.0)
-        elif self._active is self.navigator:
-            command = self.navigator(frame)
-            command = self._after_navigator(command)
-        elif self._active is not None:
-            self.navigator.observe(frame)
-            command = self._active(frame)
-            if not self._active.running:
-                ended = self._active.failure or self._active.status.value
-                self._active = None
-                self._transition(MissionState.FAILED, f"stopped following: {ended}")
+        """One period: the errand decides its command (not while the joystick drives),
+        the rule decides the state, the state says which command goes out; then the
+        events."""
+        self._joystick = joystick_overrides(frame)
+        proposed: Twist = Twist(0.0, 0.0)
+        errand = self._active if self._active is not None and self._active.running else None
+        if errand is self.navigator and not self._joystick:
+            proposed = self.navigator(frame)  # type: ignore[assignment]
         else:
-            self.navigator.observe(frame)
-            command = Twist(0.0, 0.0)
+            self.navigator.observe(frame)  # the localiser keeps the chair's place
+            if errand is not None and not self._joystick:
+                proposed = errand(frame)  # type: ignore[assignment]
+        self._decide(self._situation())
         self._check_events(frame)
-        return command  # type: ignore[return-value]
+        return self._command(proposed)
 
     def cancel(self) -> None:
         """End the mission for good (it sends stop until :meth:`reset` or a command)."""
@@ -343,7 +453,7 @@ class Mission(BehaviourBase):
         """Start over: no errand, idle (the record of transitions and events is kept)."""
         super().reset()
         self._end_errand()
-        self.goal = None
+        self.goal = self._navigator_goal = None
         if self.state is not MissionState.IDLE:
             self._transition(MissionState.IDLE, "mission reset")
 
@@ -387,39 +497,78 @@ class Mission(BehaviourBase):
         self.state, self.reason = after, reason
         self._unlogged_reasons.append(reason)
 
-    def _after_navigator(self, command: Twist) -> Twist:
-        """The mission's state from the navigator's: arrived, failed, lost, waiting."""
-        nav, label = self.navigator, self._goal_label
-        if not nav.running:
-            self._active = None
-            if nav.failure is None:
-                self._transition(MissionState.ARRIVED, f"arrived at {label}")
-            else:
-                self._transition(MissionState.FAILED, nav.failure)
-            return Twist(0.0, 0.0)
+    def _situation(self, command: str | None = None, asked: str = "") -> Situation:
+        """What the mission sees now (a new ``command`` and who ``asked``, if any)."""
+        nav, active = self.navigator, self._active
         phase = nav.feedback.phase if nav.feedback is not None else ""
-        if nav.localizer.lost:
-            if self.state is not MissionState.LOCALISING:
-                self._transition(MissionState.LOCALISING,
-                                 "lost: the scans no longer fit the map; stopping to turn "
-                                 "and find the chair's place on the map")
-            if phase not in RELOCALISING_PHASES:  # the navigator's next decision searches
-                return Twist(0.0, 0.0)
-        elif self.state is MissionState.LOCALISING:
-            self._transition(MissionState.NAVIGATING,
-                             f"found the chair's place on the map: going on to {label}")
-        elif phase.startswith("waiting"):
-            if self.state is not MissionState.WAITING:
-                self._transition(MissionState.WAITING, phase)
-                blocking = nav.seen_off_map() & ~nav.avoided
-                if blocking.sum() >= MIN_BLOCKING_CELLS:  # kept for this errand
-                    nav.avoid(blocking)
-                    self._transition(MissionState.NAVIGATING,
-                                     "the way is blocked by something the map does not "
-                                     f"have: planning round it to {label}")
-        elif self.state is MissionState.WAITING:
-            self._transition(MissionState.NAVIGATING, f"the way is clear: going on to {label}")
-        return command
+        waiting = active is nav and nav.running and phase.startswith("waiting")
+        blocked = False
+        if waiting:
+            source = (nav.local_costmap, int(nav.avoided.sum()))
+            if (self._blocking_from is None or source[0] is not self._blocking_from[0]
+                    or source[1] != self._blocking_from[1]):  # a new scan, or a new wall
+                self._blocking = nav.seen_off_map() & ~nav.avoided
+                self._blocking_from = source
+            blocked = bool(self._blocking.sum() >= MIN_BLOCKING_CELLS)  # type: ignore[union-attr]
+        return Situation(joystick=self._joystick, command=command, asked=asked,
+                         goal=self._goal_label,
+                         status=active.status if active is not None else None,
+                         failure=active.failure if active is not None else None,
+                         lost=nav.localizer.lost, waiting=waiting, blocked=blocked)
+
+    def _decide(self, situation: Situation) -> None:
+        """Ask the rule; log its transition; act on the state it leaves."""
+        decided = self.rules(self.state, situation)
+        if decided is not None:
+            after, reason = self._checked(decided)
+            self._transition(after, reason)
+            if after is MissionState.NAVIGATING and situation.blocked \
+                    and situation.command is None and self._blocking is not None:
+                self.navigator.avoid(self._blocking)  # a wall for the rest of the errand
+        self._run_the_states_behaviour()
+
+    def _checked(self, decided: object) -> tuple[MissionState, str]:
+        """The rule's answer as (state, reason); ValueError saying what is allowed."""
+        allowed = ("a mission's rule returns None (stay) or (state, reason): a MissionState "
+                   f"({', '.join(state.value for state in MissionState)}) and a non-empty "
+                   "text")
+        try:
+            after, reason = decided  # type: ignore[misc]
+            after = MissionState(after)
+        except (TypeError, ValueError):
+            raise ValueError(f"{allowed}, got {decided!r}") from None
+        if not isinstance(reason, str) or not reason.strip():
+            raise ValueError(f"{allowed}, got the reason {reason!r}")
+        return after, reason
+
+    def _run_the_states_behaviour(self) -> None:
+        """The navigator on an errand, the follower while following, none otherwise; a
+        stopped one the state asks for is started again (to the same goal)."""
+        wanted: Behaviour | None = None
+        if self.state in ERRAND_STATES and self._navigator_goal is not None:
+            wanted = self.navigator
+        elif self.state is MissionState.FOLLOWING:
+            wanted = self.follower
+        if self._active is not wanted:
+            self._end_errand()
+        if wanted is None:
+            return
+        if self._active is not wanted or not wanted.running:
+            if wanted is self.navigator:
+                self.navigator.go_to(self._navigator_goal)  # type: ignore[arg-type]
+            else:
+                wanted.reset()
+        self._active = wanted
+
+    def _command(self, proposed: Twist) -> Twist:
+        """What goes out: the errand's command while navigating, waiting or following,
+        and while localising only when the navigator turns to search; else stop."""
+        phase = self.navigator.feedback.phase if self.navigator.feedback is not None else ""
+        if self.state in (MissionState.NAVIGATING, MissionState.WAITING,
+                          MissionState.FOLLOWING) or (
+                self.state is MissionState.LOCALISING and phase in RELOCALISING_PHASES):
+            return proposed
+        return Twist(0.0, 0.0)
 
     def _check_events(self, frame: SensorFrame) -> None:
         """Fire each event whose place the estimate has come within reach of, once per

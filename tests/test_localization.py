@@ -85,9 +85,7 @@ def test_bad_settings_are_refused():
 def _kidnap(chair: SimBase, dx: float, dy: float, dtheta: float) -> None:
     """Move the simulated chair as a carer lifting and turning it would: its wheels turn
     no tick, so the filter keeps believing the old place (the kidnapped robot)."""
-    x, y = chair.chair.position
-    chair.chair.position = chair._control.position = (x + dx, y + dy)  # noqa: SLF001
-    chair.chair.angle = chair._control.angle = chair.chair.angle + dtheta  # noqa: SLF001
+    chair.carry(dx, dy, dtheta)
 
 
 def test_a_lost_chair_finds_its_place_again_by_searching_round_the_estimate():

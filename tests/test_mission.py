@@ -296,9 +296,7 @@ def test_the_joystick_wins_through_the_firmware_in_the_loop(harness_files):
 
 def _kidnap(chair: SimBase, dx: float, dy: float, dtheta: float) -> None:
     """Move the simulated chair as a carer lifting it would: its wheels turn no tick."""
-    x, y = chair.chair.position
-    chair.chair.position = chair._control.position = (x + dx, y + dy)  # noqa: SLF001
-    chair.chair.angle = chair._control.angle = chair.chair.angle + dtheta  # noqa: SLF001
+    chair.carry(dx, dy, dtheta)
 
 
 def test_a_lost_chair_stops_finds_its_place_and_completes_the_errand():

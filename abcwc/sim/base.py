@@ -239,6 +239,19 @@ class SimBase(BodyMixin):
         c = self.params.joystick_centre
         self.joystick = (c, c)
 
+    def carry(self, dx: float, dy: float, dtheta: float) -> None:
+        """Move the chair by ``(dx, dy)`` m and turn it ``dtheta`` rad in the world frame
+        as a carer lifting it would: its wheels turn no tick and its estimators do not
+        know (a kidnapping, to test what a lost localiser does). ValueError for a move
+        that is not three finite numbers."""
+        moves = (dx, dy, dtheta)
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                   and math.isfinite(v) for v in moves):
+            raise ValueError(f"carry takes finite dx, dy (m) and dtheta (rad), got {moves!r}")
+        x, y = self.chair.position
+        self.chair.position = self._control.position = (x + dx, y + dy)
+        self.chair.angle = self._control.angle = self.chair.angle + dtheta
+
     def set_speed_cap(self, offset: int) -> None:
         """Limit host commands to 128 +- ``offset`` pot bytes (as the real chair's cap)."""
         self.board.set_speed_cap(offset)

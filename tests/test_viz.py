@@ -310,3 +310,29 @@ def test_distance_and_bearing_figure_states_eqns_11_and_12():
     assert "rho = 6.80 m" in left.get_title() and "alpha = +21.0°" in left.get_title()
     assert "wrap alpha" in right.get_title()
     plt.close(fig)
+
+
+def test_the_state_machine_is_drawn_from_the_rule_it_is_given():
+    from abcwc.behaviours import MissionState, next_state
+    from abcwc.viz import plot_state_machine, probe_rule
+
+    st = MissionState
+    edges = probe_rule(next_state)
+    assert "lost" in edges[(st.NAVIGATING, st.LOCALISING)]
+    assert "found / clear" in edges[(st.LOCALISING, st.NAVIGATING)]
+    assert "blocked" in edges[(st.WAITING, st.NAVIGATING)]
+    assert (st.MANUAL_OVERRIDE, st.NAVIGATING) in edges  # a new command, only
+    assert edges[(st.MANUAL_OVERRIDE, st.NAVIGATING)] == ["go to"]
+
+    def resumes(state, situation):
+        if state is st.MANUAL_OVERRIDE and not situation.joystick and not situation.command:
+            return st.NAVIGATING, "released"
+        return next_state(state, situation)
+
+    assert "released" in probe_rule(resumes)[(st.MANUAL_OVERRIDE, st.NAVIGATING)]
+    ax = plot_state_machine(resumes)
+    labels = [text.get_text() for text in ax.texts]
+    assert "released" in labels and "manual override" in labels
+    assert any(label.startswith("from every state: joystick: to manual override")
+               for label in labels)
+    plt.close(ax.figure)

@@ -21,6 +21,7 @@ from abcwc.viz.costmap import (
     plot_occupancy,
 )
 from abcwc.viz.landmark import plot_distance_and_bearing
+from abcwc.viz.mission import plot_state_machine, plot_timeline, probe_rule
 from abcwc.viz.scene import (
     ChairArtist,
     chair_outlines,
@@ -56,6 +57,9 @@ __all__ = [
     "collision_rows",
     "encoder_velocity",
     "plot_distance_and_bearing",
+    "plot_state_machine",
+    "plot_timeline",
+    "probe_rule",
     "frame_rows",
     "mount_pose",
     "plot_chair",

@@ -18,11 +18,7 @@ from nbformat import NotebookNode
 
 __all__ = ["CHAPTERS_TO_COME", "chapter_references", "front_page"]
 
-CHAPTERS_TO_COME = {
-    "18": ("The capstone",
-           "The whole stack on one errand: spoken or typed goal, map, navigation among "
-           "people, a sign or a person to find on the way", "4.3.7, 5.3"),
-}
+CHAPTERS_TO_COME: dict[str, tuple[str, str, str]] = {}
 """Chapters planned but not written yet: number -> (title, what it will teach, thesis)."""
 
 _REFERENCE = re.compile(

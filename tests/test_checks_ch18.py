@@ -115,6 +115,7 @@ def test_a_rule_that_raises_names_its_line(capsys):
     (not_written, "not written yet"),
     (next_state, "abcwc's own"),
     (lambda state, situation: next_state(state, situation), "abcwc's own next_state"),
+    (lambda state, situation: ch18.next_state(state, situation), "abcwc's own"),
     (functools.partial(next_state), "abcwc's own"),
     (lambda state, situation: mission_module.next_state(state, situation), "abcwc's own"),
 ])
@@ -161,6 +162,8 @@ def test_lift_requests_check(lift_run, capsys):
     assert_not_yet(ch18.lift_requests_check(lambda: 1, log, lift), capsys, "how far")
     assert_not_yet(ch18.lift_requests_check(lambda: 2.0, log, lift), capsys, "whole number")
     assert_not_yet(ch18.lift_requests_check(not_written, log, lift), capsys, "not written")
+    ran = lambda: len(ch18.run_lift_route(seconds=1.0)[1].events_fired)  # noqa: E731
+    assert_not_yet(ch18.lift_requests_check(ran, log, lift), capsys, "abcwc's own run_lift_route")
     # the measured count is checked too: part of the run, or a log whose events were
     # edited, is not the route's run
     half = log.select(slice(0, len(log) // 2))
@@ -193,3 +196,8 @@ def test_scan_choice_check(capsys):
     assert_not_yet(ch18.scan_choice_check(lambda: (1000, 4630)), capsys, "milliseconds")
     assert_not_yet(ch18.scan_choice_check(lambda: 1.0), capsys, "two numbers")
     assert_not_yet(ch18.scan_choice_check(not_written), capsys, "not written")
+    assert_not_yet(ch18.scan_choice_check(ch18.true_scan_choice), capsys, "abcwc's own")
+    assert_not_yet(ch18.scan_choice_check(lambda: ch18.true_scan_choice()), capsys,
+                   "abcwc's own true_scan_choice")
+    assert_not_yet(ch18.scan_choice_check(functools.partial(ch18.true_scan_choice, 9)),
+                   capsys, "abcwc's own")

@@ -78,7 +78,7 @@ def _calls(fn: object, target: Callable, depth: int = 0, seen: set | None = None
     seen = set() if seen is None else seen
     if fn is target:
         return True
-    if depth > 4 or id(fn) in seen:
+    if depth > 4 or id(fn) in seen or isinstance(fn, type):
         return False
     seen.add(id(fn))
     inner = [getattr(fn, "func", None), getattr(fn, "__wrapped__", None),
@@ -114,6 +114,15 @@ def _closed_over(fn: object) -> list:
         except ValueError:  # a cell not filled yet
             continue
     return values
+
+
+def _expect_yours(fn: Callable, *answers: Callable) -> None:
+    """Refuse ``fn`` if it is, wraps or calls one of abcwc's ``answers``."""
+    expect_own(fn, *answers)
+    for answer in answers:
+        if _calls(fn, answer):
+            raise NotYet(f"that is abcwc's own {answer.__name__} (yours calls it): write "
+                         "yours")
 
 
 def _guarded(rule: Callable) -> Callable:
@@ -315,9 +324,7 @@ def _blocked(rule: Callable, worlds: dict[str, World]) -> None:
 def rule_check(rule: Callable) -> str:
     """``rule(state, situation)`` drives a :class:`Mission` through the joystick, a lost
     chair and a blocked corridor on :func:`rule_worlds` (module notes)."""
-    expect_own(rule, next_state)
-    if _calls(rule, next_state):
-        raise NotYet("that is abcwc's own next_state (your rule calls it): write yours")
+    _expect_yours(rule, next_state)
     guarded = _guarded(rule)
     worlds = rule_worlds()
     _override(guarded, worlds["day room"])
@@ -374,6 +381,7 @@ def run_lift_route(seed: int = 18, seconds: float = 150.0) -> tuple[RunLog, Miss
 def lift_requests_check(predicted: Callable[[], int], log, lift: Pose2D) -> str:
     """The count written before the run against the run's log (its ``mission_event``
     channel), itself checked against the chair's true track."""
+    _expect_yours(predicted, run_lift_route, _requests_along)
     value = predicted()
     expect(isinstance(value, (int, np.integer)) and not isinstance(value, bool)
            and value >= 0, f"predicted_lift_requests() gave {format_value(value)}; write "
@@ -421,6 +429,7 @@ def true_scan_choice(options: int = 9) -> tuple[float, float]:
 @checker("measurement")
 def scan_choice_check(choice: Callable[[], tuple[float, float]]) -> str:
     """``(interval, mean time)`` read off the sweep against the model's closed form."""
+    _expect_yours(choice, true_scan_choice, scan_false_rate)
     interval, seconds = numbers(choice(), 2, "scan_choice()",
                                 "return two numbers: the interval (s) and the mean time "
                                 "to select there (s)")

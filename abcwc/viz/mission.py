@@ -102,8 +102,11 @@ def _arrow(ax: Axes, start: tuple[float, float], end: tuple[float, float], names
     ax.annotate("", (x1, y1), (x0, y0), arrowprops={
         "arrowstyle": "-|>", "color": "tab:blue", "shrinkA": shrink_from, "shrinkB": 22,
         "connectionstyle": "arc3,rad=0.18"})
-    mx, my = (x0 + x1) / 2 + 0.09 * (y1 - y0), (y0 + y1) / 2 - 0.09 * (x1 - x0)
-    ax.text(mx, my, ", ".join(names), fontsize=7.5, ha="center", va="center",
+    dx, dy = 0.09 * (y1 - y0), -0.09 * (x1 - x0)  # to the arc's middle, off the chord
+    sideways = abs(dx) > abs(dy)  # the label goes on the arc's outer side
+    ax.text((x0 + x1) / 2 + dx, (y0 + y1) / 2 + dy, ", ".join(names), fontsize=7.5,
+            ha=("left" if dx > 0 else "right") if sideways else "center",
+            va="center" if sideways else ("bottom" if dy > 0 else "top"),
             color="tab:blue", bbox={"boxstyle": "round,pad=0.15", "fc": "white",
                                     "ec": "none", "alpha": 0.85})
 

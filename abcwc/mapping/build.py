@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from abcwc.estimation.odometry import odometry_from_log
+from abcwc.geometry import compose, relative
 from abcwc.log import RunLog
 from abcwc.mapping.grid import OccupancyGrid
 from abcwc.mapping.map_io import load_map, save_map
@@ -32,13 +33,16 @@ from abcwc.types import LIDAR_FRAME, Pose2D
 @dataclass
 class BuiltMap:
     """A map built from a drive: trinary ``cells`` (map_server's values) on ``grid``, the
-    ``slam`` result (None for a loaded map) and the YAML ``path`` it was saved to (or
-    None)."""
+    ``slam`` result (None for a loaded map), the YAML ``path`` it was saved to (or None)
+    and, for a built map, ``end_pose``: where the chair stood at the drive's end, in the
+    map's frame (the last scan's corrected pose moved on by the chair's own poses since
+    it), the pose a navigator on this map starts from."""
 
     cells: np.ndarray
     grid: OccupancyGrid
     slam: SlamResult | None
     path: Path | None
+    end_pose: Pose2D | None = None  # the chair at the log's end, in the map's frame
 
 
 MAPPING_SLAM = SlamSettings(linear_update=0.5, angular_update=0.4)
@@ -75,7 +79,10 @@ def build_map(log: RunLog, start: Pose2D, path: str | Path | None = None,
     result = run_slam(laser, settings)
     grid = render(laser, result.scan_poses, resolution=resolution)
     saved = None if path is None else save_map(grid, path)
-    return BuiltMap(grid.trinary(), grid, result, saved)
+    last = laser.odometry[-1]  # the chair's own pose at the last scan
+    since = relative(last, np.asarray(poses, dtype=float)[-1])
+    end = Pose2D(*map(float, compose(result.scan_poses[-1], since)))
+    return BuiltMap(grid.trinary(), grid, result, saved, end)
 
 
 def load_built_map(path: str | Path) -> BuiltMap:

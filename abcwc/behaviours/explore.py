@@ -179,11 +179,21 @@ class Explorer(BehaviourBase):
 
     # ------------------------------------------------------------------ per frame
     @property
+    def _nav(self) -> Navigator:
+        """The navigator, once the first scan has built it."""
+        if self.navigator is None:
+            raise RuntimeError("the explorer has not seen its first scan yet")
+        return self.navigator
+
+    @property
     def pose(self) -> Pose2D:
         """The chair's own estimate of its pose (the start before the first frame)."""
         return self.start if self.navigator is None else self.navigator.localizer.pose
 
     def update(self, frame: SensorFrame) -> Twist:
+        """Every frame: the navigator localises and drives, the new scan goes into the
+        grid at the estimate, the navigator's map is renewed when due, and when a goal
+        has ended the next is chosen."""
         if self._started is None:
             self._started = frame.t
         if self.navigator is None:
@@ -212,14 +222,14 @@ class Explorer(BehaviourBase):
         if not isinstance(scan, LaserScan):
             return Twist(0.0, 0.0)  # wait for the lidar
         self._lay(scan, self.start)
-        cells = self.grid.trinary()
+        cells, geometry = self.map_cells()
         if (cells == OCCUPIED).sum() < 10:
             self.fail("the first scan saw almost nothing: no walls within the lidar's reach")
             return Twist(0.0, 0.0)
-        self._landmarks = occupied_points(cells, self.grid)
+        self._landmarks = occupied_points(cells, geometry)
         localizer = MapLocalizer(self._landmarks, self.start, self.params, ekf=self._ekf)
-        static = self._static_map()
-        self.navigator = Navigator(static, localizer, self.params, self._navigator_settings)
+        self.navigator = Navigator(_static(cells, geometry), localizer, self.params,
+                                   self._navigator_settings)
         localizer.observe(frame)
         self._next_refresh = frame.t + self.settings.refresh_interval
         return Twist(0.0, 0.0)
@@ -245,7 +255,7 @@ class Explorer(BehaviourBase):
     def _integrate(self, frame: SensorFrame) -> None:
         scan = frame.readings.get(LIDAR_FRAME)
         if isinstance(scan, LaserScan) and scan.stamp > self._last_scan:
-            self._lay(scan, self.navigator.localizer.pose)  # type: ignore[union-attr]
+            self._lay(scan, self._nav.localizer.pose)
 
     def estimates(self, log: RunLog) -> np.ndarray:
         """(N, 3) the chair's own pose estimate at every row of ``log`` (the run it drove):
@@ -299,22 +309,23 @@ class Explorer(BehaviourBase):
     def _refresh(self, now: float) -> None:
         """The navigator and its localiser on the grid as it is now."""
         self._next_refresh = now + self.settings.refresh_interval
-        navigator = self.navigator
+        navigator = self._nav
         cells, geometry = self.map_cells()
-        navigator.replace_map(_static(cells, geometry))  # type: ignore[union-attr]
+        navigator.replace_map(_static(cells, geometry))
         rows, cols = self._window()
         settled = self.grid.log_odds[rows, cols] >= self.grid.model.l_max
         self._extend_landmarks(geometry.cell_to_world(*np.nonzero(settled)))
-        goal = self._goal
-        if goal is not None and goal.kind == "frontier" and navigator.running:  # type: ignore[union-attr]
-            frontier = self.frontiers(navigator.global_costmap)  # type: ignore[union-attr]
+        goal, costmap = self._goal, navigator.global_costmap
+        if goal is not None and goal.kind == "frontier" and navigator.running:
+            frontier = self.frontiers(costmap)
             cells_left = np.vstack(frontier) if frontier else np.zeros((0, 2))
             near = np.hypot(*(cells_left - goal.point).T) <= self.settings.frontier_reach \
                 if len(cells_left) else np.zeros(0, dtype=bool)
-            if not near.any() and self._room_to_turn(navigator.global_costmap,  # type: ignore[union-attr]
-                                                     np.array([[self.pose.x, self.pose.y]]))[0]:
+            row, col = costmap.world_to_cell(np.array([self.pose.x, self.pose.y]))
+            if not near.any() and costmap.contains(row, col) \
+                    and self._room_to_turn(costmap)[row, col]:
                 goal.seen = True  # on to the next, from where the chair can turn
-                navigator.cancel()  # type: ignore[union-attr]
+                navigator.cancel()
 
     def _extend_landmarks(self, points: np.ndarray) -> None:
         """Give the localiser the wall cells ``points`` (settled ones: at the grid's
@@ -330,59 +341,57 @@ class Explorer(BehaviourBase):
         new = points[distance > self.settings.landmark_spacing]
         if len(new):
             self._landmarks = np.vstack([self._landmarks, new])
-            self.navigator.localizer.replace_map(self._landmarks)  # type: ignore[union-attr]
+            self._nav.localizer.replace_map(self._landmarks)
 
-    def _room_to_turn(self, costmap: Costmap, points: np.ndarray) -> np.ndarray:
-        """Whether the chair could turn on the spot at each of ``points`` (K, 2, m): no
-        wall of ``costmap`` within its circumscribed radius plus ``turn_margin``."""
+    def _room_to_turn(self, costmap: Costmap) -> np.ndarray:
+        """(height, width) bool on ``costmap``'s cells: where the chair could turn on the
+        spot, no wall within its circumscribed radius plus ``turn_margin``."""
         walls = costmap.cost == LETHAL
-        clearance = (ndimage.distance_transform_edt(~walls) * costmap.resolution
-                     if walls.any() else np.full(costmap.shape, np.inf))
-        rows, cols = costmap.world_to_cell(points)
-        inside = costmap.contains(rows, cols)
-        room = self.navigator.footprint.circumscribed_radius + self.settings.turn_margin  # type: ignore[union-attr]
-        out = np.zeros(len(points), dtype=bool)
-        out[inside] = clearance[rows[inside], cols[inside]] >= room
-        return out
+        if not walls.any():
+            return np.ones(costmap.shape, dtype=bool)
+        room = self._nav.footprint.circumscribed_radius + self.settings.turn_margin
+        return ndimage.distance_transform_edt(~walls) * costmap.resolution >= room
 
     # ------------------------------------------------------------------ goals
     def _record(self, now: float) -> None:
-        goal, navigator = self._goal, self.navigator
-        status = navigator.status  # type: ignore[union-attr]
-        failure = navigator.failure  # type: ignore[union-attr]
-        outcome = "seen" if goal.seen else status.value  # type: ignore[union-attr]
-        self.visits.append(Visit(goal.point, goal.kind, outcome,  # type: ignore[union-attr]
-                                 None if goal.seen else failure, goal.started, now))  # type: ignore[union-attr]
+        """The goal that just ended, in :attr:`visits`; too many failures end the run."""
+        goal, navigator = self._goal, self._nav
+        if goal is None:
+            return
         self._goal = None
-        if status is not Status.FAILED or goal.seen:  # type: ignore[union-attr]
+        failure = None if goal.seen else navigator.failure
+        outcome = "seen" if goal.seen else navigator.status.value
+        self.visits.append(Visit(goal.point, goal.kind, outcome, failure, goal.started, now))
+        if navigator.status is not Status.FAILED or goal.seen:
             self._failures = 0
             return
         self._failures += 1
-        if goal.kind == "frontier":  # type: ignore[union-attr]
-            self._failed_frontiers.append(goal.point)  # type: ignore[union-attr]
+        if goal.kind == "frontier":
+            self._failed_frontiers.append(goal.point)
         if self._failures >= self.settings.max_failures:
             pose = self.pose
             self.fail(f"{self._failures} goals in a row not reached, the last: {failure}; "
                       f"the chair is at ({pose.x:.2f}, {pose.y:.2f}) m by its estimate")
 
     def _next_goal(self, now: float) -> None:
-        navigator = self.navigator
+        """Send the navigator to the tour's next point or the nearest frontier."""
+        navigator = self._nav
         if self.tour is not None:
             if self._next_tour >= len(self.tour):
                 self._finish(f"the tour of {len(self.tour)} points is done")
                 return
-            point = self.tour[self._next_tour]
+            goal = _Goal(self.tour[self._next_tour], "tour", now)
             self._next_tour += 1
-            self._goal = _Goal(point, "tour", now)
         else:
             self._refresh(now)
-            found = self.nearest_frontier(navigator.global_costmap)  # type: ignore[union-attr]
+            found = self.nearest_frontier(navigator.global_costmap)
             if found is None:
                 self._finish("no reachable frontier is left")
                 return
-            self._goal = _Goal(found, "frontier", now)
-        navigator.replace_map(self._static_map())  # type: ignore[union-attr]
-        navigator.go_to(self._goal.point)  # type: ignore[union-attr]
+            goal = _Goal(found, "frontier", now)
+        self._goal = goal
+        navigator.replace_map(self._static_map())  # the window now holds the goal
+        navigator.go_to(goal.point)
 
     def _finish(self, reason: str) -> None:
         self.ended_because = reason
@@ -394,25 +403,21 @@ class Explorer(BehaviourBase):
     def frontiers(self, costmap: Costmap) -> list[np.ndarray]:
         """The frontiers of the seen grid (on the cells of ``costmap``, the navigator's
         inflated one) at least ``min_frontier`` m long, each as (K, 2) map points (m) of
-        its cells (:func:`frontier_cells`); cells where the chair's centre may not stand
-        on ``costmap`` are left out."""
+        its cells (:func:`frontier_cells`); only cells where the chair may stand and
+        turn on the spot on ``costmap`` count."""
         rows, cols = self._window()
         if (rows.stop - rows.start, cols.stop - cols.start) != costmap.shape:
             raise ValueError(f"the costmap {costmap.shape} is not on the seen grid's cells")
         cells = math.ceil(self.settings.min_unknown / self.grid.resolution ** 2)
         frontier = frontier_cells(self.grid.log_odds[rows, cols], cells)
-        frontier &= costmap.cost < INSCRIBED
+        frontier &= (costmap.cost < INSCRIBED) & self._room_to_turn(costmap)
         labels, count = ndimage.label(frontier, structure=np.ones((3, 3)))
         if not count:
             return []
         sizes = np.bincount(labels.ravel())
         big = np.flatnonzero(sizes * costmap.resolution >= self.settings.min_frontier)
-        out = []
-        for label in big[big > 0]:
-            r, c = np.nonzero(labels == label)
-            points = costmap.cell_to_world(r, c)
-            out.append(points[self._room_to_turn(costmap, points)])
-        return [points for points in out if len(points)]
+        return [costmap.cell_to_world(*np.nonzero(labels == label))
+                for label in big[big > 0]]
 
     def nearest_frontier(self, costmap: Costmap) -> tuple[float, float] | None:
         """The goal on the nearest reachable frontier by travel cost from the chair over
@@ -536,18 +541,27 @@ def joined(logs: Sequence[RunLog]) -> RunLog:
     return RunLog(channels, meta=logs[0].meta, scans=scans)
 
 
+SLAM_END_STD = (0.02, 0.02, 0.005)
+"""m, m, rad: how sure the chair's pose at the end of a mapping run is taken to be on the
+map SLAM built (measured on the floor's tour: within 0.02 m and 0.002 rad of the truth)."""
+
+
 @dataclass
 class MappedFloor:
     """A floor's map and how it came: ``built`` (cells, grid, SLAM result, saved path);
     the exploration's ``log`` and ``explorer`` (None for a loaded map); ``wall_seconds``
     the wall-clock time it took; ``pose`` where the chair stands, in the map's frame
-    (:attr:`BuiltMap.end_pose`; the start for a loaded map)."""
+    (:attr:`BuiltMap.end_pose`; the start for a loaded map); ``ekf`` the chair's filter
+    (its calibration and gyro bias kept) moved onto the map's frame, for
+    ``Navigator.for_map(built.cells, built.grid, pose, ekf=ekf)`` to drive on from there
+    (the ``ekf`` given, for a loaded map)."""
 
     built: BuiltMap
     log: RunLog | None
     explorer: Explorer | None
     wall_seconds: float
     pose: Pose2D
+    ekf: ChairEkf | None = None
 
 
 def floor_map(chair: Base, path: str | Path, tour: Sequence[tuple[float, float]] | None = None,
@@ -564,11 +578,15 @@ def floor_map(chair: Base, path: str | Path, tour: Sequence[tuple[float, float]]
     start = start or chair.pose  # type: ignore[attr-defined]
     if path.exists():
         return MappedFloor(load_built_map(path), None, None, time.perf_counter() - clock,
-                           start)
+                           start, ekf)
     explorer = Explorer(start, tour, chair.params, ekf, settings)
     log = run_exploration(chair, explorer, max_seconds)
     if explorer.status is Status.FAILED:
         raise RuntimeError(f"mapping the floor failed: {explorer.failure}")
     built = build_map(log, start, path, poses=explorer.estimates(log), params=chair.params)
-    return MappedFloor(built, log, explorer, time.perf_counter() - clock,
-                       built.end_pose)  # type: ignore[arg-type]
+    end, navigator = built.end_pose, explorer.navigator
+    assert end is not None and navigator is not None  # a run that mapped has both
+    filter_ = navigator.localizer.ekf
+    # onto the map's frame: the explorer's own grid had turned a little with its drift
+    filter_.reset_pose(end, np.diag(np.square(SLAM_END_STD)))
+    return MappedFloor(built, log, explorer, time.perf_counter() - clock, end, filter_)

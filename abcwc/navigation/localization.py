@@ -250,11 +250,7 @@ class MapLocalizer:
     def _relocalise(self, fix: Pose2D, fix_cov: np.ndarray) -> None:
         """Put the pose at ``fix`` with covariance ``fix_cov``, its correlations with
         the other states dropped; velocity and gyro bias keep their estimates."""
-        x, cov = self.ekf.filter.x, self.ekf.filter.P
-        x[:3] = (fix.x, fix.y, fix.theta)
-        cov[:3, 3:] = 0.0
-        cov[3:, :3] = 0.0
-        cov[:3, :3] = fix_cov
+        self.ekf.reset_pose(fix, fix_cov)
         self.relocalisations += 1
 
     def see_through_fraction(self, points: np.ndarray, pose: np.ndarray) -> float:

@@ -50,8 +50,8 @@ def floor(tmp_path_factory):
     places = chair.world.places
     path = tmp_path_factory.mktemp("maps") / "floor.yaml"
     ekf = calibrated_ekf(chair)
-    mapped = floor_map(chair, path, tour=[(places[n].x, places[n].y) for n in TOUR],
-                       ekf=ekf, start=places["start"])
+    mapped = floor_map(chair, path, places["start"],
+                       tour=[(places[n].x, places[n].y) for n in TOUR], ekf=ekf)
     own = mapped.explorer.estimates(mapped.log)
     drift = np.hypot(*(own[:, :2] - mapped.log.pose[:, :2]).T).max()
     print(f"\nmapping the floor: {mapped.wall_seconds:.1f} s wall, "
@@ -101,7 +101,7 @@ def test_the_map_files_reload_identical_and_a_known_floor_is_loaded(floor):
     assert loaded.grid.resolution == mapped.built.grid.resolution
     assert loaded.grid.origin == mapped.built.grid.origin
     before = chair.frame.t
-    known = floor_map(chair, path)  # the saved map: nothing driven
+    known = floor_map(chair, path, chair.world.places["start"])  # the saved map: no drive
     assert chair.frame.t == before and known.log is None
     assert np.array_equal(known.built.cells, mapped.built.cells)
 
@@ -249,3 +249,12 @@ def test_bad_input_is_refused_with_what_is_allowed(tmp_path):
         build_map(log, chair.world.places["start"], scan_every=0)
     with pytest.raises(ValueError, match="max_seconds"):
         run_exploration(chair, Explorer(chair.pose), 0.0)
+
+
+def test_a_mapping_run_that_does_not_end_in_time_says_so(tmp_path):
+    world = _two_rooms(tmp_path)
+    chair = SimBase(world, seed=0, lidar=True, people=False)
+    with pytest.raises(RuntimeError, match="did not end within 3 s"):
+        floor_map(chair, tmp_path / "rooms.yaml", world.places["start"],
+                  tour=[(10.0, 2.0)], max_seconds=3.0)
+    assert not (tmp_path / "rooms.yaml").exists()  # no half map saved

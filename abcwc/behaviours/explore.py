@@ -564,18 +564,18 @@ class MappedFloor:
     ekf: ChairEkf | None = None
 
 
-def floor_map(chair: Base, path: str | Path, tour: Sequence[tuple[float, float]] | None = None,
-              ekf: ChairEkf | None = None, settings: ExploreSettings | None = None,
-              max_seconds: float = 900.0, start: Pose2D | None = None) -> MappedFloor:
-    """The map of the floor ``chair`` stands on, starting at ``start`` (default the
-    body's ``pose``, the start it was put at): the saved map at ``path`` (a ``.yaml``,
-    map_server files) if there is one, a known floor; else the chair maps the floor by
-    ``tour`` or by frontiers (:class:`Explorer`, at most ``max_seconds`` s), builds the
-    map with graph SLAM (:func:`~abcwc.mapping.build.build_map`) and saves it there. A
-    mapping run whose explorer failed raises :class:`RuntimeError` with its reason."""
+def floor_map(chair: Base, path: str | Path, start: Pose2D,
+              tour: Sequence[tuple[float, float]] | None = None, ekf: ChairEkf | None = None,
+              settings: ExploreSettings | None = None, max_seconds: float = 900.0
+              ) -> MappedFloor:
+    """The map of the floor ``chair`` stands on at ``start`` (its known pose, e.g. a
+    world's start place): the saved map at ``path`` (a ``.yaml``, map_server files) if
+    there is one, a known floor; else the chair maps the floor by ``tour`` or by
+    frontiers (:class:`Explorer`, at most ``max_seconds`` s), builds the map with graph
+    SLAM (:func:`~abcwc.mapping.build.build_map`) and saves it there. A mapping run that
+    failed or did not end in time raises :class:`RuntimeError` saying why."""
     clock = time.perf_counter()
     path = Path(path)
-    start = start or chair.pose  # type: ignore[attr-defined]
     if path.exists():
         return MappedFloor(load_built_map(path), None, None, time.perf_counter() - clock,
                            start, ekf)
@@ -583,6 +583,10 @@ def floor_map(chair: Base, path: str | Path, tour: Sequence[tuple[float, float]]
     log = run_exploration(chair, explorer, max_seconds)
     if explorer.status is Status.FAILED:
         raise RuntimeError(f"mapping the floor failed: {explorer.failure}")
+    if explorer.running:
+        explorer.cancel()
+        raise RuntimeError(f"mapping the floor did not end within {max_seconds:.0f} s "
+                           f"({len(explorer.visits)} goals visited)")
     built = build_map(log, start, path, poses=explorer.estimates(log), params=chair.params)
     end, navigator = built.end_pose, explorer.navigator
     assert end is not None and navigator is not None  # a run that mapped has both

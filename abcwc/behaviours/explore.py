@@ -90,7 +90,7 @@ class ExploreSettings:
     min_unknown: float = 2.0  # m^2: a smaller unknown patch is a gap between far beams
     # (or the inside of a piece of furniture), not unexplored space
     frontier_reach: float = 1.0  # m: a frontier goal with no frontier cell this near is seen
-    turn_margin: float = 0.25  # m beyond the footprint's circumscribed radius that a
+    turn_margin: float = 0.4  # m beyond the footprint's circumscribed radius that a
     # frontier goal keeps from walls: the chair can turn there to its next goal
     landmark_spacing: float = 0.1  # m: an occupied cell this near the localiser's
     # map is not added to it (the map it matches scans against is drawn once)
@@ -403,21 +403,22 @@ class Explorer(BehaviourBase):
     def frontiers(self, costmap: Costmap) -> list[np.ndarray]:
         """The frontiers of the seen grid (on the cells of ``costmap``, the navigator's
         inflated one) at least ``min_frontier`` m long, each as (K, 2) map points (m) of
-        its cells (:func:`frontier_cells`); only cells where the chair may stand and
-        turn on the spot on ``costmap`` count."""
+        its cells where the chair may stand and turn on the spot on ``costmap``
+        (:func:`frontier_cells`); a frontier with no such cell is left out."""
         rows, cols = self._window()
         if (rows.stop - rows.start, cols.stop - cols.start) != costmap.shape:
             raise ValueError(f"the costmap {costmap.shape} is not on the seen grid's cells")
         cells = math.ceil(self.settings.min_unknown / self.grid.resolution ** 2)
         frontier = frontier_cells(self.grid.log_odds[rows, cols], cells)
-        frontier &= (costmap.cost < INSCRIBED) & self._room_to_turn(costmap)
+        frontier &= costmap.cost < INSCRIBED
         labels, count = ndimage.label(frontier, structure=np.ones((3, 3)))
         if not count:
             return []
         sizes = np.bincount(labels.ravel())
         big = np.flatnonzero(sizes * costmap.resolution >= self.settings.min_frontier)
-        return [costmap.cell_to_world(*np.nonzero(labels == label))
-                for label in big[big > 0]]
+        labels[~self._room_to_turn(costmap)] = 0  # goals only where the chair can turn
+        found = [costmap.cell_to_world(*np.nonzero(labels == label)) for label in big[big > 0]]
+        return [points for points in found if len(points)]
 
     def nearest_frontier(self, costmap: Costmap) -> tuple[float, float] | None:
         """The goal on the nearest reachable frontier by travel cost from the chair over

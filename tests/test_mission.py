@@ -533,3 +533,23 @@ def test_a_rule_that_answers_something_else_is_refused_with_what_is_allowed():
             mission.go_to("centre")
     with pytest.raises(ValueError, match="rules is a function"):
         Mission.for_world(chair.world, rules="next_state")
+
+
+def test_a_mission_on_a_built_map_drives_by_the_filter_it_is_given():
+    """The filter a mapping run hands back (here: one that believes the chair 0.3 m off
+    its start) is the localiser's, so the mission starts from its belief; without one,
+    from the start given."""
+    from abcwc.estimation.ekf import ChairEkf
+    from abcwc.mapping.grid import FREE, OCCUPIED, OccupancyGrid
+    from abcwc.mapping.truth import rasterise_walls
+
+    chair = SimBase("lab", seed=2, lidar=True, people=False)
+    grid = OccupancyGrid.covering(-1.0, -1.0, 14.0, 9.0, 0.05)
+    cells = np.where(rasterise_walls(chair.world.walls, grid), OCCUPIED, FREE).astype(np.int8)
+    start = chair.world.places["start"]
+    ekf = ChairEkf(Pose2D(start.x + 0.3, start.y, start.theta), chair.params)
+    mission = Mission.for_map(cells, grid, start, places=chair.world.places, ekf=ekf)
+    assert mission.navigator.localizer.ekf is ekf
+    assert mission.navigator.localizer.pose.x == pytest.approx(start.x + 0.3)
+    plain = Mission.for_map(cells, grid, start, places=chair.world.places)
+    assert plain.navigator.localizer.pose.x == pytest.approx(start.x)

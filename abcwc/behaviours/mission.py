@@ -77,6 +77,7 @@ from abcwc.types import Pose2D, SensorFrame, Twist
 
 if TYPE_CHECKING:
     from abcwc.base import Base
+    from abcwc.estimation.ekf import ChairEkf
     from abcwc.log import RunLog
     from abcwc.mapping.grid import GridGeometry
     from abcwc.sim.world import World
@@ -329,12 +330,15 @@ class Mission(BehaviourBase):
                 places: dict[str, Pose2D], params: ChairParams | None = None,
                 follower: Behaviour | None = None, events: Sequence[PlaceEvent] | None = None,
                 settings: NavigatorSettings | None = None,
-                rules: Rule = next_state) -> Mission:
+                rules: Rule = next_state, ekf: ChairEkf | None = None) -> Mission:
         """A mission on a built map (trinary ``cells`` on ``grid``, as
         :meth:`Navigator.for_map`) with the named ``places`` (m, rad), from ``start``;
-        ``settings`` as :meth:`for_world`."""
+        ``settings`` as :meth:`for_world`; ``ekf`` the localiser's filter (default:
+        nominal odometry from ``start``; after mapping, the one the mapping run hands
+        back on the map's frame, :attr:`MappedFloor.ekf
+        <abcwc.behaviours.explore.MappedFloor.ekf>`)."""
         settings = settings or NavigatorSettings(relocalise_turn=RELOCALISE_TURN)
-        navigator = Navigator.for_map(cells, grid, start, params, settings=settings)
+        navigator = Navigator.for_map(cells, grid, start, params, ekf=ekf, settings=settings)
         navigator.places = dict(places)
         return cls(navigator, follower, events=events, params=params, rules=rules)
 

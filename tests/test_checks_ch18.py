@@ -161,6 +161,7 @@ def test_lift_requests_check(lift_run, capsys):
     assert_not_yet(ch18.lift_requests_check(lambda: 3, log, lift), capsys, "one a visit")
     assert_not_yet(ch18.lift_requests_check(lambda: 1, log, lift), capsys, "how far")
     assert_not_yet(ch18.lift_requests_check(lambda: 2.0, log, lift), capsys, "whole number")
+    assert_not_yet(ch18.lift_requests_check(lambda: True, log, lift), capsys, "whole number")
     assert_not_yet(ch18.lift_requests_check(not_written, log, lift), capsys, "not written")
     ran = lambda: len(ch18.run_lift_route(seconds=1.0)[1].events_fired)  # noqa: E731
     assert_not_yet(ch18.lift_requests_check(ran, log, lift), capsys, "abcwc's own run_lift_route")
@@ -201,3 +202,12 @@ def test_scan_choice_check(capsys):
                    "abcwc's own true_scan_choice")
     assert_not_yet(ch18.scan_choice_check(functools.partial(ch18.true_scan_choice, 9)),
                    capsys, "abcwc's own")
+
+
+def test_the_scan_checks_messages_do_not_give_the_answer_away(capsys):
+    """A wrong reading is told how it is wrong, never the 0.98 s or the 4.56 s."""
+    for wrong in ((0.6, 3.0), (1.3, 5.8), (1.0, 9.0), (0.85, 4.0), (1.0, 3.0)):
+        result = ch18.scan_choice_check(lambda wrong=wrong: wrong)
+        out = capsys.readouterr().out
+        assert not result.passed
+        assert "0.98" not in out and "4.56" not in out and "4.6" not in out, out

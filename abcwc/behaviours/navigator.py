@@ -194,7 +194,6 @@ class Navigator(BehaviourBase):
         self.settings = s = settings or NavigatorSettings()
         super().__init__(rate_hz=s.controller_frequency)
         self.params = p = params or default_params()
-        self.static_map = static_map
         self.localizer = localizer
         self.places = dict(places or {})
         self.footprint = chair_footprint(p)
@@ -208,16 +207,8 @@ class Navigator(BehaviourBase):
             local, padding=s.footprint_padding,
             braking_delay=(self.stopping.reaction_time
                            + s.acc_lim_x / self.stopping.limits.max_jerk))
-        self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
-        self._map_costmap = self.global_costmap  # without what avoid() added for a goal
-        self.avoided = np.zeros(static_map.shape, dtype=bool)  # cells avoid() made walls
-        self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
-        self.range_layer = RangeSensorLayer(static_map)
-        self._range_stamp: float | None = None
         self._rays = range_sensor_rays(p)
-        # m from each map cell to the nearest wall: range marks this near are the wall's
-        self._wall_distance = ndimage.distance_transform_edt(
-            static_map.cost != LETHAL) * static_map.resolution
+        self._use_map(static_map)
         self._last_scan_stamp = -math.inf
         self.goal: Pose2D | None = None
         self.path: Path | None = None
@@ -249,6 +240,27 @@ class Navigator(BehaviourBase):
         static.add_static(cells)
         localizer = MapLocalizer(occupied_points(cells, grid), start, params, ekf=ekf)
         return cls(static, localizer, params, settings)
+
+    def replace_map(self, static_map: Costmap) -> None:
+        """Drive on ``static_map`` from now on (a map that grows as the chair explores):
+        the global costmap, the people tracker's walls, the range layer and the wall
+        distances follow it; the goal stays and is planned again at the next decision.
+        The localiser keeps its own map (see :meth:`MapLocalizer.replace_map`)."""
+        self._use_map(static_map)
+        self._next_plan = -math.inf
+
+    def _use_map(self, static_map: Costmap) -> None:
+        """Everything the navigator derives from its static map."""
+        self.static_map = static_map
+        self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
+        self._map_costmap = self.global_costmap  # without what avoid() added for a goal
+        self.avoided = np.zeros(static_map.shape, dtype=bool)  # cells avoid() made walls
+        self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
+        self.range_layer = RangeSensorLayer(static_map)
+        self._range_stamp: float | None = None
+        # m from each map cell to the nearest wall: range marks this near are the wall's
+        self._wall_distance = ndimage.distance_transform_edt(
+            static_map.cost != LETHAL) * static_map.resolution
 
     # ------------------------------------------------------------------ goals
     def go_to(self, goal: Pose2D | tuple[float, ...] | str) -> None:

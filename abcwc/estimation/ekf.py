@@ -422,6 +422,21 @@ class ChairEkf:
         self.filter.update(np.array([pose.x, pose.y, pose.theta]), H_POSE, np.asarray(cov),
                            angle=2)
 
+    def reset_pose(self, pose: Pose2D, cov: np.ndarray) -> None:
+        """Put the pose at ``pose`` with covariance ``cov`` (3 x 3), its correlations
+        with the other states dropped; velocity and gyro bias keep their estimates. Not a
+        fusion: the pose is known afresh (a relocalisation, or a map whose frame the
+        filter's own map had drifted from)."""
+        _check_pose("pose", pose)
+        cov = np.asarray(cov, dtype=float)
+        if cov.shape != (3, 3) or not np.isfinite(cov).all():
+            raise ValueError(f"cov must be a finite 3 x 3 covariance, got shape {cov.shape}")
+        x, full = self.filter.x, self.filter.P
+        x[:3] = (pose.x, pose.y, pose.theta)
+        full[:3, 3:] = 0.0
+        full[3:, :3] = 0.0
+        full[:3, :3] = cov
+
     def update_landmark(self, measured: tuple[float, float], landmark: tuple[float, float],
                         mount: tuple[float, float, float], cov: np.ndarray) -> None:
         """Update with a sighting of a landmark whose place is known: ``measured`` =

@@ -100,17 +100,10 @@ class MapLocalizer:
                  relocalise_after: int = 5, lost_after: int = 30,
                  see_through: float = 0.1):
         self.params = p = params or default_params()
-        self.target = IcpTarget.build(map_points)
-        self._map_points = np.asarray(map_points, dtype=float)
-        self._field: LikelihoodField | None = None  # built on the first recovery
         if not 0.0 < see_through < 1.0:
             raise ValueError(f"see_through must be a fraction in (0, 1), got {see_through!r}")
         self.see_through = float(see_through)
-        lo, hi = self._map_points.min(axis=0) - 1.0, self._map_points.max(axis=0) + 1.0
-        size = np.ceil((hi - lo) / 0.05).astype(int) + 1
-        self._wall_grid = GridGeometry(0.05, int(size[0]), int(size[1]), (lo[0], lo[1], 0.0))
-        self._walls = np.zeros(self._wall_grid.shape, dtype=bool)
-        self._walls[self._wall_grid.world_to_cell(self._map_points)] = True
+        self.replace_map(map_points)
         self.ekf = ekf or ChairEkf(start, p, start_std=(0.05, 0.05, 0.02))
         scanners = [name for name, spec in p.sensors.items() if getattr(spec, "beams", 1) > 1]
         if scan_frame not in scanners:
@@ -135,6 +128,21 @@ class MapLocalizer:
         self.accepted = 0
         self.rejected = 0
         self.rejected_in_a_row = 0
+
+    def replace_map(self, map_points: np.ndarray) -> None:
+        """Match scans against ``map_points`` (N, 2, m; N >= 3) from now on: a map that
+        grows as the chair explores. The estimate is kept."""
+        points = np.asarray(map_points, dtype=float)
+        if points.ndim != 2 or points.shape[1] != 2 or len(points) < 3:
+            raise ValueError(f"map_points must be (N, 2) with N >= 3, got {points.shape}")
+        self.target = IcpTarget.build(points)
+        self._map_points = points
+        self._field: LikelihoodField | None = None  # built on the first recovery
+        lo, hi = points.min(axis=0) - 1.0, points.max(axis=0) + 1.0
+        size = np.ceil((hi - lo) / 0.05).astype(int) + 1
+        self._wall_grid = GridGeometry(0.05, int(size[0]), int(size[1]), (lo[0], lo[1], 0.0))
+        self._walls = np.zeros(self._wall_grid.shape, dtype=bool)
+        self._walls[self._wall_grid.world_to_cell(points)] = True
 
     # ------------------------------------------------------------------ estimate
     @property
@@ -242,11 +250,7 @@ class MapLocalizer:
     def _relocalise(self, fix: Pose2D, fix_cov: np.ndarray) -> None:
         """Put the pose at ``fix`` with covariance ``fix_cov``, its correlations with
         the other states dropped; velocity and gyro bias keep their estimates."""
-        x, cov = self.ekf.filter.x, self.ekf.filter.P
-        x[:3] = (fix.x, fix.y, fix.theta)
-        cov[:3, 3:] = 0.0
-        cov[3:, :3] = 0.0
-        cov[:3, :3] = fix_cov
+        self.ekf.reset_pose(fix, fix_cov)
         self.relocalisations += 1
 
     def see_through_fraction(self, points: np.ndarray, pose: np.ndarray) -> float:

@@ -64,6 +64,7 @@ from abcwc.types import Pose2D, SensorFrame, Twist
 
 if TYPE_CHECKING:
     from abcwc.base import Base
+    from abcwc.estimation.ekf import ChairEkf
     from abcwc.log import RunLog
     from abcwc.mapping.grid import GridGeometry
     from abcwc.sim.world import World
@@ -205,12 +206,15 @@ class Mission(BehaviourBase):
     def for_map(cls, cells: np.ndarray, grid: GridGeometry, start: Pose2D,
                 places: dict[str, Pose2D], params: ChairParams | None = None,
                 follower: Behaviour | None = None, events: Sequence[PlaceEvent] | None = None,
-                settings: NavigatorSettings | None = None) -> Mission:
+                settings: NavigatorSettings | None = None, ekf: ChairEkf | None = None
+                ) -> Mission:
         """A mission on a built map (trinary ``cells`` on ``grid``, as
-        :meth:`Navigator.for_map`) with the named ``places`` (m, rad), from ``start``;
+        :meth:`Navigator.for_map`) with the named ``places`` (m, rad), from ``start``,
+        its localiser's filter ``ekf`` (default: nominal odometry from ``start``; after
+        mapping, the filter the mapping drove by, moved onto the map's frame);
         ``settings`` as :meth:`for_world`."""
         settings = settings or NavigatorSettings(relocalise_turn=RELOCALISE_TURN)
-        navigator = Navigator.for_map(cells, grid, start, params, settings=settings)
+        navigator = Navigator.for_map(cells, grid, start, params, ekf=ekf, settings=settings)
         navigator.places = dict(places)
         return cls(navigator, follower, events=events, params=params)
 

@@ -72,6 +72,7 @@ class ErrandResult:
     track: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     estimates: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     mapping_seconds: float = 0.0  # s of simulated time the mapping took (0: map loaded)
+    mapping_collisions: int = 0  # contacts while mapping
 
     @property
     def arrived(self) -> bool:
@@ -85,6 +86,7 @@ class ErrandResult:
             "heard_by": self.heard_by, "state": self.state, "arrived": self.arrived,
             "reason": self.reason, "seconds": round(self.seconds, 2),
             "mapping_seconds": round(self.mapping_seconds, 2),
+            "mapping_collisions": self.mapping_collisions,
             "wall_seconds": round(self.wall_seconds, 1), "distance_m": round(self.distance, 2),
             "final_error_m": round(self.final_error, 3),
             "closest_person_m": round(self.closest_person, 3),
@@ -142,15 +144,20 @@ class ErrandJudge:
 
 def spoken_command(text: str, places: dict[str, Pose2D]) -> tuple[object, str]:
     """``text`` synthesised by espeak-ng and heard by the command recogniser: the
-    recogniser's command and "spoken"; when no synthesiser is installed, or the recogniser
-    refuses what it heard, the typed path: ``text`` itself and "typed"."""
+    recogniser's command and "spoken"; when no synthesiser is installed, a place's name is
+    not in the recogniser's pronunciation dictionary, or the recogniser refuses what it
+    heard, the typed path: ``text`` itself and "typed"."""
     from abcwc.perception.speech.commands import CommandSet
     from abcwc.perception.speech.recognizer import CommandRecognizer
     from abcwc.perception.speech.synthesis import espeak_available, speak
 
     if not espeak_available():
         return text, "typed"
-    heard = CommandRecognizer(CommandSet(places)).recognise(speak(text))
+    try:
+        recogniser = CommandRecognizer(CommandSet(places))
+    except ValueError:  # a place's name the recogniser has no pronunciation for
+        return text, "typed"
+    heard = recogniser.recognise(speak(text))
     if heard.command is None:
         return text, "typed"
     return heard.command, "spoken"
@@ -176,13 +183,17 @@ def run_errand(mission: Mission, chair: SimBase, destination: str, spoken: bool 
     collisions0, t0, start = chair.collisions, chair.t, chair.pose
     log = chair.run(judge, timeout, progress=progress,
                     until=lambda: mission.state in ENDED)
+    state, reason = mission.state.value, mission.reason
+    if mission.state not in ENDED:  # out of time: the chair stands, the errand failed
+        mission.stop(f"out of time: {timeout:g} s without arriving")
+        state, reason = MissionState.FAILED.value, mission.reason
     end = chair.pose
     goal = mission.destinations[destination]
     path = np.vstack([[start.x, start.y], log.pose[:, :2]])
     distance = float(np.sum(np.hypot(*np.diff(path, axis=0).T)))
     return ErrandResult(
         world=chair.world.name, destination=destination, heard=heard.phrase,
-        heard_by=heard_by, state=mission.state.value, reason=mission.reason,
+        heard_by=heard_by, state=state, reason=reason,
         seconds=chair.t - t0, started_at=t0, wall_seconds=time.perf_counter() - wall_start,
         distance=distance, final_error=math.hypot(goal.x - end.x, goal.y - end.y),
         tolerance=mission.navigator.settings.xy_goal_tolerance,
@@ -287,7 +298,7 @@ def capstone_errand(world: World, destination: str, seed: int = 0, out: str | Pa
         map_path = folder / "map.yaml"
         for stale in (map_path, map_path.with_suffix(".pgm")):
             stale.unlink(missing_ok=True)  # the demo maps the floor every time
-        mapping_t0 = chair.t
+        mapping_t0, contacts0 = chair.t, chair.collisions
         floor: MappedFloor = floor_map(chair, map_path, start, tour=tour_of(world, start),
                                        ekf=ekf, progress=progress)
         mapping_seconds = chair.t - mapping_t0
@@ -296,6 +307,7 @@ def capstone_errand(world: World, destination: str, seed: int = 0, out: str | Pa
         result = run_errand(mission, chair, destination, spoken=spoken, timeout=timeout,
                             progress=progress)
         result.mapping_seconds = mapping_seconds
+        result.mapping_collisions = chair.collisions - contacts0 - result.collisions
         result.wall_seconds = time.perf_counter() - wall_start
         files: list[str] = []
         if out is not None:
@@ -305,5 +317,63 @@ def capstone_errand(world: World, destination: str, seed: int = 0, out: str | Pa
     return result, files
 
 
+def run_errands(count: int = 20, seed: int = 0, world: World | str = "floor",
+                progress: bool = False) -> list[ErrandResult]:
+    """``count`` errands one after another on ``world`` among its walking people, each to
+    a seeded random place (not the one the chair is at), typed, from the map the chair
+    made itself by a tour (:func:`capstone_errand`'s mapping, once): the capstone's
+    trial. Each result is judged by the simulator's truth."""
+    import tempfile
+
+    from abcwc.sim.world import load_world
+
+    if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+        raise ValueError(f"count must be a whole number >= 1, got {count!r}")
+    world = load_world(world) if isinstance(world, str) else world
+    names = sorted(name for name in world.places if name != "start")
+    if len(names) < 2:
+        raise ValueError(f"{world.name} needs two places besides the start for errands")
+    chair = SimBase(world, seed=seed, lidar=True, people=True)
+    ekf = calibrated_ekf(chair)
+    with tempfile.TemporaryDirectory() as scratch:
+        floor = floor_map(chair, Path(scratch) / "map.yaml", world.start,
+                          tour=tour_of(world, world.start), ekf=ekf, progress=progress)
+    mission = Mission.for_map(floor.built.cells, floor.built.grid, floor.pose,
+                              dict(world.places), chair.params, ekf=floor.ekf)
+    rng = np.random.default_rng(seed)
+    results: list[ErrandResult] = []
+    here: str | None = None
+    steps = range(count)
+    if progress:
+        from tqdm.auto import tqdm
+
+        steps = tqdm(steps, desc="errands", unit="errand")
+    for _ in steps:
+        choices = [name for name in names if name != here]
+        here = choices[int(rng.integers(len(choices)))]
+        results.append(run_errand(mission, chair, here, spoken=False))
+    return results
+
+
+def errands_table(results: list[ErrandResult]) -> str:
+    """The trial's results, one line per errand, then the totals."""
+    lines = [f"{'#':>2}  {'to':<14}{'outcome':<10}{'s':>7}{'m':>7}{'closest':>9}"
+             f"{'loc err':>9}{'contacts':>9}"]
+    for k, r in enumerate(results):
+        lines.append(f"{k:>2}  {r.destination:<14}{'arrived' if r.arrived else 'FAILED':<10}"
+                     f"{r.seconds:>7.1f}{r.distance:>7.1f}{r.closest_person:>9.2f}"
+                     f"{r.max_localisation_error:>9.3f}{r.collisions:>9d}")
+    arrived = sum(r.arrived for r in results)
+    lines.append(f"arrived {arrived} of {len(results)}; contacts "
+                 f"{sum(r.collisions for r in results)}; closest person "
+                 f"{min(r.closest_person for r in results):.2f} m; localisation error max "
+                 f"{max(r.max_localisation_error for r in results):.3f} m")
+    for k, r in enumerate(results):
+        if not r.arrived:
+            lines.append(f"errand {k} to the {r.destination}: {r.reason}")
+    return "\n".join(lines)
+
+
 __all__ = ["ENDED", "ErrandJudge", "ErrandResult", "capstone_errand", "errand_destination",
-           "run_errand", "spoken_command", "tour_of", "write_errand_report"]
+           "errands_table", "run_errand", "run_errands", "spoken_command", "tour_of",
+           "write_errand_report"]

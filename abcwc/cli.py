@@ -1,10 +1,10 @@
-"""The abcwc command: demo, bench, posegraph, slam, navtrial and course build.
+"""The abcwc command: demo, bench, posegraph, slam, navtrial, errands and course build.
 
 Every command takes the same few options:
 
 - ``--quiet``: no progress bars (they are on by default and go to stderr);
 - ``--json``: the figures as one JSON object on stdout instead of text (every command
-  that prints figures: demo, bench, posegraph, slam, navtrial);
+  that prints figures: demo, bench, posegraph, slam, navtrial, errands);
 - ``--out DIR``: a folder, created when the command writes into it (demo, posegraph, slam);
 - ``--debug``: an error shows its traceback.
 
@@ -96,8 +96,15 @@ def _demo_errand(args: argparse.Namespace) -> int:
 
     world = load_world(args.world or "floor")
     destination = errand_destination(world, args.to)
-    result, files = capstone_errand(world, destination, seed=args.seed, out=out,
-                                    spoken=not args.typed, progress=not args.quiet)
+    result, grid, files = capstone_errand(world, destination, seed=args.seed, out=out,
+                                          spoken=not args.typed, progress=not args.quiet)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from abcwc.viz.report import write_errand_report
+
+    report = write_errand_report(result, grid, out, world)
+    files = [str(report), *files, str(out / "errand.gif")]
     if args.json:
         _print_json({**result.figures(), "seed": args.seed, "files": files})
     else:
@@ -258,6 +265,23 @@ def _navtrial(args: argparse.Namespace) -> int:
     return 0
 
 
+def _errands(args: argparse.Namespace) -> int:
+    """The capstone's trial: errands to seeded random places from the chair's own map."""
+    from abcwc.experiments.errand import errands_table, run_errands
+
+    if args.count < 1:
+        raise ValueError(f"--count must be at least 1, got {args.count}")
+    results = run_errands(args.count, seed=args.seed, world=args.world,
+                          progress=not args.quiet)
+    if args.json:
+        _print_json({"world": args.world, "seed": args.seed, "count": len(results),
+                     "arrived": sum(r.arrived for r in results),
+                     "errands": [r.figures() for r in results]})
+    else:
+        print(errands_table(results))
+    return 0
+
+
 def _course_build(args: argparse.Namespace) -> int:
     from abcwc import course
 
@@ -372,6 +396,16 @@ def build_parser() -> argparse.ArgumentParser:
     navtrial.add_argument("--no-people", action="store_true", help="without walking people")
     _json_option(navtrial)
     navtrial.set_defaults(run=_navtrial)
+
+    errands = commands.add_parser(
+        "errands", parents=common,
+        help="the capstone's trial: the chair maps the floor, then runs errands to seeded "
+             "random places among walking people, judged by ground truth")
+    errands.add_argument("--count", type=int, default=20)
+    errands.add_argument("--seed", type=int, default=0)
+    errands.add_argument("--world", default="floor", help="a world's name or a .json file")
+    _json_option(errands)
+    errands.set_defaults(run=_errands)
     return parser
 
 

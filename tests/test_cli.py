@@ -92,7 +92,7 @@ def test_version_is_the_packages():
 
 def test_every_command_takes_quiet_and_debug_and_the_figures_ones_json():
     minimal = {"demo": [], "bench": [], "course build": [], "posegraph": ["g.g2o"],
-               "slam": ["log.clf"], "navtrial": []}
+               "slam": ["log.clf"], "navtrial": [], "errands": []}
     parser = build_parser()
     for command, needed in minimal.items():
         args = parser.parse_args([*command.split(), *needed, "--quiet", "--debug"])
@@ -261,6 +261,9 @@ USER_ERRORS = {
     "no such solutions folder": (["course", "build", "--solutions", "nope"], {},
                                  "nope: no such directory"),
     "no goals": (["navtrial", "--goals", "0"], {}, "--goals must be at least 1"),
+    "no errands": (["errands", "--count", "0"], {}, "--count must be at least 1"),
+    "errands in an unknown world": (["errands", "--world", "moon"], {},
+                                    "unknown world 'moon'"),
     "navtrial in an unknown world": (["navtrial", "--world", "moon"], {},
                                      "unknown world 'moon'"),
 }

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from abcwc.behaviours.explore import MappedFloor, floor_map
-from abcwc.behaviours.mission import Mission, MissionState, mission_timeline
+from abcwc.behaviours.mission import Mission, MissionState
 from abcwc.experiments.navigation_trial import calibrated_ekf, gap_to_people
 from abcwc.geometry import transform_points
 from abcwc.log import RunLog
@@ -212,42 +212,6 @@ def _place_xy(mission: Mission, place: str) -> tuple[float, float]:
     return pose.x, pose.y
 
 
-def write_errand_report(result: ErrandResult, grid: OccupancyGrid, out: str | Path,
-                        world: World, animation: bool = True) -> Path:
-    """The errand's HTML report (:func:`abcwc.viz.report.write_html_report`) in ``out``:
-    ``errand.html``, with the chair's map, the route, the states and the figures."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from abcwc.viz.report import (
-        figure_png,
-        plot_map_and_route,
-        plot_mission_states,
-        write_html_report,
-    )
-
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    places = {name: pose for name, pose in world.places.items()}
-    map_png = figure_png(plot_map_and_route(grid, result.track, result.estimates, places,
-                                            result.events).figure)
-    timeline = [(start - result.started_at, end - result.started_at, state)
-                for start, end, state in mission_timeline(result.log)
-                ] if result.log is not None else []
-    states_png = figure_png(plot_mission_states(timeline, result.events).figure)
-    gif = None
-    if animation and result.log is not None:
-        from abcwc import viz
-
-        path = viz.save_animation(viz.animate_run(result.log, world, scans=False),
-                                  out / "errand.gif")
-        gif = path.read_bytes()
-    figures = [(name.replace("_", " "), str(value)) for name, value in result.figures().items()]
-    return write_html_report(out / "errand.html", f"Errand to the {result.destination}",
-                             result.summary(), figures, map_png, states_png, gif,
-                             result.transitions)
-
-
 def errand_destination(world: World, to: str | None) -> str:
     """The errand's destination in ``world``: ``to`` (a place of it), by default the
     cafeteria; ValueError naming the world's places otherwise."""
@@ -278,14 +242,14 @@ def tour_of(world: World, start: Pose2D) -> list[tuple[float, float]]:
 
 def capstone_errand(world: World, destination: str, seed: int = 0, out: str | Path | None = None,
                     spoken: bool = True, people: bool = True, progress: bool = False,
-                    timeout: float = 300.0) -> tuple[ErrandResult, list[str]]:
+                    timeout: float = 300.0) -> tuple[ErrandResult, OccupancyGrid, list[str]]:
     """The capstone (module notes): on ``world``'s simulator (its walkers walking unless
     ``people`` is False; lidar on; seed ``seed``) the chair learns its gyro's bias
     standing still, maps the floor by a tour of its places (map_server files
     ``map.yaml``/``map.pgm`` in ``out``), and is then told, spoken unless ``spoken`` is
-    False, to go to ``destination``. With ``out`` it writes there the report
-    (``errand.html``), the map, the animation and the errand's RunLog (``errand.npz``).
-    Returns the result and the files written."""
+    False, to go to ``destination``. With ``out`` the map files and the errand's RunLog
+    (``errand.npz``) are written there (the report is :func:`abcwc.viz.report.
+    write_errand_report`'s). Returns the result, the chair's map and the files written."""
     import tempfile
 
     wall_start = time.perf_counter()
@@ -311,10 +275,9 @@ def capstone_errand(world: World, destination: str, seed: int = 0, out: str | Pa
         result.wall_seconds = time.perf_counter() - wall_start
         files: list[str] = []
         if out is not None:
-            report = write_errand_report(result, floor.built.grid, folder, world)
             log_path = result.log.save(folder / "errand.npz")  # type: ignore[union-attr]
-            files = [str(report), str(map_path), str(folder / "errand.gif"), str(log_path)]
-    return result, files
+            files = [str(map_path), str(log_path)]
+    return result, floor.built.grid, files
 
 
 def run_errands(count: int = 20, seed: int = 0, world: World | str = "floor",
@@ -375,5 +338,4 @@ def errands_table(results: list[ErrandResult]) -> str:
 
 
 __all__ = ["ENDED", "ErrandJudge", "ErrandResult", "capstone_errand", "errand_destination",
-           "errands_table", "run_errand", "run_errands", "spoken_command", "tour_of",
-           "write_errand_report"]
+           "errands_table", "run_errand", "run_errands", "spoken_command", "tour_of"]

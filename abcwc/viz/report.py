@@ -21,7 +21,10 @@ from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
+from abcwc.behaviours.mission import mission_timeline
+from abcwc.experiments.errand import ErrandResult
 from abcwc.mapping.grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+from abcwc.sim.world import World
 from abcwc.types import Pose2D
 from abcwc.viz._common import CHAIR_COLOR, PLACE_COLOR, new_axes
 
@@ -150,5 +153,31 @@ def write_html_report(path: str | Path, title: str, summary: str,
     return path
 
 
+def write_errand_report(result: ErrandResult, grid: OccupancyGrid, out: str | Path,
+                        world: World, animation: bool = True) -> Path:
+    """An errand's report in the folder ``out``: ``errand.html``
+    (:func:`write_html_report`) with the chair's map ``grid`` and the route over it, the
+    mission's states and the figures, and with ``animation`` the drive over ``world``
+    (also written as ``errand.gif``)."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    map_png = figure_png(plot_map_and_route(grid, result.track, result.estimates, world.places,
+                                            result.events).figure)
+    timeline = [(start - result.started_at, end - result.started_at, state)
+                for start, end, state in mission_timeline(result.log)
+                ] if result.log is not None else []
+    states_png = figure_png(plot_mission_states(timeline, result.events).figure)
+    gif = None
+    if animation and result.log is not None:
+        from abcwc.viz.animation import animate_run, save_animation
+
+        path = save_animation(animate_run(result.log, world, scans=False), out / "errand.gif")
+        gif = path.read_bytes()
+    figures = [(name.replace("_", " "), str(value)) for name, value in result.figures().items()]
+    return write_html_report(out / "errand.html", f"Errand to the {result.destination}",
+                             result.summary(), figures, map_png, states_png, gif,
+                             result.transitions)
+
+
 __all__ = ["STATE_COLOURS", "figure_png", "plot_map_and_route", "plot_mission_states",
-           "write_html_report"]
+           "write_errand_report", "write_html_report"]

@@ -65,7 +65,8 @@ class Base(Protocol):
     def stop(self) -> None: ...
     def set_speed_cap(self, offset: int) -> None: ...
     def run(self, controller: Controller, seconds: float, progress: bool = False,
-            safety: SafetyChoice = BODY_FILTER) -> RunLog: ...
+            safety: SafetyChoice = BODY_FILTER,
+            until: Callable[[], bool] | None = None) -> RunLog: ...
     def drive(self, command: PotCommand | Twist, seconds: float,
               safety: SafetyChoice = BODY_FILTER) -> RunLog: ...
     def close(self) -> None: ...
@@ -76,7 +77,8 @@ class Base(Protocol):
 
 
 def run_controller(chair: Base, controller: Controller, seconds: float,
-                   progress: bool = False, verb: str = "driving") -> RunLog:
+                   progress: bool = False, verb: str = "driving",
+                   until: Callable[[], bool] | None = None) -> RunLog:
     """The control loop every body's ``run`` uses.
 
     Every period: ``controller(latest frame)``; send what it returns (a PotCommand, a
@@ -87,10 +89,15 @@ def run_controller(chair: Base, controller: Controller, seconds: float,
     changed (the RunLog's ``safety`` channel). A controller with a ``log_fields()``
     method (the mission layer's state and reasons) is asked for its short text fields
     after each call, and each becomes a text channel of the RunLog (``""`` in rows
-    without it). ``progress`` shows a tqdm bar labelled "<verb> <seconds> s".
+    without it). ``until``, a function of nothing, ends the run early: it is asked after
+    every period and the run stops once it says True (``seconds`` is then the longest
+    the run may take). ``progress`` shows a tqdm bar labelled "<verb> <seconds> s".
     """
     if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds >= 0):
         raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
+    if until is not None and not callable(until):
+        raise ValueError(f"until must be a function of nothing that says when to stop, "
+                         f"got {until!r}")
     steps = round(seconds / chair.period)
     recorder = LogRecorder(chair.log_meta())
     iterator = range(steps)
@@ -110,6 +117,8 @@ def run_controller(chair: Base, controller: Controller, seconds: float,
             reason = chair.safety.reason if chair.safety is not None else None
         frame = chair.step()
         recorder.add(frame, sent, pots, wanted=wanted, safety=reason, text=text)
+        if until is not None and until():
+            break
     return recorder.build()
 
 
@@ -165,8 +174,10 @@ class BodyMixin:
             self.safety.stopped()
 
     def run(self, controller: Controller, seconds: float, progress: bool = False,
-            safety: SafetyChoice = BODY_FILTER) -> RunLog:
-        """Call ``controller(frame)`` every period for ``seconds``; send what it returns.
+            safety: SafetyChoice = BODY_FILTER,
+            until: Callable[[], bool] | None = None) -> RunLog:
+        """Call ``controller(frame)`` every period for ``seconds`` (or until ``until()``
+        says True); send what it returns.
 
         The controller returns a PotCommand, a Twist, or None (send nothing: after
         250 ms the watchdog stops the chair). Every command passes the safety filter:
@@ -182,7 +193,7 @@ class BodyMixin:
             self.safety = safety  # type: ignore[assignment]
         try:
             return run_controller(self, controller, seconds, progress,  # type: ignore[arg-type]
-                                  verb=self.run_verb)
+                                  verb=self.run_verb, until=until)
         finally:
             self.safety = own
 

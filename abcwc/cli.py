@@ -1,10 +1,10 @@
-"""The abcwc command: demo, bench, posegraph, slam, navtrial and course build.
+"""The abcwc command: demo, bench, posegraph, slam, navtrial, errands and course build.
 
 Every command takes the same few options:
 
 - ``--quiet``: no progress bars (they are on by default and go to stderr);
 - ``--json``: the figures as one JSON object on stdout instead of text (every command
-  that prints figures: demo, bench, posegraph, slam, navtrial);
+  that prints figures: demo, bench, posegraph, slam, navtrial, errands);
 - ``--out DIR``: a folder, created when the command writes into it (demo, posegraph, slam);
 - ``--debug``: an error shows its traceback.
 
@@ -13,7 +13,8 @@ file or data folder, ``course build`` outside a checkout, ...) ends the command 
 line ``abcwc: error: <message>`` on stderr and exit status 2; argparse reports what it
 finds itself (an unknown option, a value of the wrong type) its own way, also with 2. Any
 other exception is a bug in abcwc: one line says so (exit status 1, as Python's own for an
-uncaught exception), and ``--debug`` shows its traceback. Options are checked before any
+uncaught exception), and ``--debug`` shows its traceback. ``abcwc demo`` exits with 3 when
+its errand did not arrive. Options are checked before any
 folder is made, so a refused command leaves nothing behind.
 """
 
@@ -30,6 +31,8 @@ from pathlib import Path
 PROG = "abcwc"
 USAGE_ERROR = 2
 INTERNAL_ERROR = 1
+MISSION_FAILED = 3
+"""``abcwc demo``'s exit status when the errand did not arrive (the report says why)."""
 
 USER_ERRORS: tuple[type[Exception], ...] = (
     ValueError, FileNotFoundError, IsADirectoryError, NotADirectoryError, PermissionError,
@@ -75,8 +78,46 @@ def _out_folder(path: str) -> Path:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    if not (math.isfinite(args.seconds) and args.seconds > 0):
-        raise ValueError(f"--seconds must be a finite number > 0, got {args.seconds:g}")
+    """The named mission: the capstone's errand (the default) or chapter 03's wander."""
+    if args.mission == "wander":
+        return _demo_wander(args)
+    return _demo_errand(args)
+
+
+def _demo_errand(args: argparse.Namespace) -> int:
+    """The ABC concept end to end (:mod:`abcwc.experiments.errand`): map the floor, be
+    told where to go, go there among people; the report in ``--out``."""
+    if args.seconds is not None:
+        raise ValueError("--seconds is the wander's; the errand ends when it arrives or "
+                         "fails (use --mission wander --seconds S)")
+    out = _out_folder(args.out)
+    from abcwc.experiments.errand import capstone_errand, errand_destination
+    from abcwc.sim.world import load_world
+
+    world = load_world(args.world or "floor")
+    destination = errand_destination(world, args.to)
+    result, grid, files = capstone_errand(world, destination, seed=args.seed, out=out,
+                                          spoken=not args.typed, progress=not args.quiet)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from abcwc.viz.report import write_errand_report
+
+    report = write_errand_report(result, grid, out, world)
+    files = [str(report), *files, str(out / "errand.gif")]
+    if args.json:
+        _print_json({**result.figures(), "seed": args.seed, "files": files})
+    else:
+        print(f"{result.summary()}; wrote {', '.join(files)}")
+    return 0 if result.arrived else MISSION_FAILED
+
+
+def _demo_wander(args: argparse.Namespace) -> int:
+    seconds = 300.0 if args.seconds is None else args.seconds
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise ValueError(f"--seconds must be a finite number > 0, got {seconds:g}")
+    if args.to is not None:
+        raise ValueError("--to is the errand's; the wander goes nowhere in particular")
     out = _out_folder(args.out)
 
     import matplotlib
@@ -88,9 +129,9 @@ def _demo(args: argparse.Namespace) -> int:
     from abcwc.behaviours import SonarAvoider
     from abcwc.sim import SimBase
 
-    chair = SimBase(world=args.world, seed=args.seed)
+    chair = SimBase(world=args.world or "lab", seed=args.seed)
     out.mkdir(parents=True, exist_ok=True)
-    log = chair.run(SonarAvoider(), args.seconds, progress=not args.quiet)
+    log = chair.run(SonarAvoider(), seconds, progress=not args.quiet)
     figure = viz.plot_run(log, chair.world)
     plot_path = out / "demo_wander.png"
     figure.savefig(plot_path, dpi=110, bbox_inches="tight")
@@ -100,7 +141,7 @@ def _demo(args: argparse.Namespace) -> int:
     log_path = log.save(out / "demo_wander.npz")
     files = [str(plot_path), str(animation_path), str(log_path)]
     if args.json:
-        _print_json({"world": chair.world.name, "seed": args.seed,
+        _print_json({"mission": "wander", "world": chair.world.name, "seed": args.seed,
                      "seconds": float(log.t[-1] - log.t[0] + log.period),
                      "distance_m": log.distance_travelled() if log.has_ground_truth
                      else None,
@@ -224,6 +265,23 @@ def _navtrial(args: argparse.Namespace) -> int:
     return 0
 
 
+def _errands(args: argparse.Namespace) -> int:
+    """The capstone's trial: errands to seeded random places from the chair's own map."""
+    from abcwc.experiments.errand import errands_table, run_errands
+
+    if args.count < 1:
+        raise ValueError(f"--count must be at least 1, got {args.count}")
+    results = run_errands(args.count, seed=args.seed, world=args.world,
+                          progress=not args.quiet)
+    if args.json:
+        _print_json({"world": args.world, "seed": args.seed, "count": len(results),
+                     "arrived": sum(r.arrived for r in results),
+                     "errands": [r.figures() for r in results]})
+    else:
+        print(errands_table(results))
+    return 0
+
+
 def _course_build(args: argparse.Namespace) -> int:
     from abcwc import course
 
@@ -258,12 +316,28 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     common = [_common_options(True)]
 
-    demo = commands.add_parser("demo", help="run the headless course demo", parents=common)
+    demo = commands.add_parser(
+        "demo", parents=common,
+        help="run the headless course demo: the chair maps the floor, is told where to go "
+             "and goes there among people (or --mission wander)")
+    demo.add_argument("--mission", choices=["errand", "wander"], default="errand",
+                      help="errand (default): map, be told, go; wander: chapter 03's "
+                           "sonar-avoidance wander")
     demo.add_argument("--out", default="abcwc-demo", metavar="DIR",
-                      help="folder for the plot, animation and log (default: abcwc-demo)")
-    demo.add_argument("--world", default="lab", help="a world's name or a .json world file")
+                      help="folder for the report, map, animation and log (default: "
+                           "abcwc-demo)")
+    demo.add_argument("--world", default=None,
+                      help="a world's name or a .json world file (default: floor for the "
+                           "errand, lab for the wander)")
+    demo.add_argument("--to", metavar="PLACE",
+                      help="the errand's destination: a place of the world (default: the "
+                           "cafeteria)")
     demo.add_argument("--seed", type=int, default=0)
-    demo.add_argument("--seconds", type=float, default=300.0, help="simulated seconds")
+    demo.add_argument("--typed", action="store_true",
+                      help="type the command instead of speaking it (espeak-ng and the "
+                           "recogniser)")
+    demo.add_argument("--seconds", type=float, default=None,
+                      help="the wander's simulated seconds (default 300)")
     _json_option(demo)
     demo.set_defaults(run=_demo)
 
@@ -322,6 +396,16 @@ def build_parser() -> argparse.ArgumentParser:
     navtrial.add_argument("--no-people", action="store_true", help="without walking people")
     _json_option(navtrial)
     navtrial.set_defaults(run=_navtrial)
+
+    errands = commands.add_parser(
+        "errands", parents=common,
+        help="the capstone's trial: the chair maps the floor, then runs errands to seeded "
+             "random places among walking people, judged by ground truth")
+    errands.add_argument("--count", type=int, default=20)
+    errands.add_argument("--seed", type=int, default=0)
+    errands.add_argument("--world", default="floor", help="a world's name or a .json file")
+    _json_option(errands)
+    errands.set_defaults(run=_errands)
     return parser
 
 

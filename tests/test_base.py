@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import abcwc
 from abcwc.base import Base
 from abcwc.params import ChairParams
@@ -78,3 +80,23 @@ def test_a_body_without_params_is_not_a_base():
             return lambda *a, **k: None
 
     assert not isinstance(NoParams(), Base)
+
+
+def test_run_until_ends_the_run_in_the_period_it_says_so():
+    """``until`` is asked after every period; the run ends at the first True, and the
+    log holds exactly the periods driven (the truth's clock agrees)."""
+    from abcwc.sim import SimBase
+
+    chair = SimBase("lab", seed=0)
+    calls = []
+
+    def until():
+        calls.append(chair.t)
+        return chair.t >= 1.0 - 1e-9
+
+    log = chair.run(lambda frame: abcwc.Twist(0.3, 0.0), 10.0, until=until)
+    assert len(log) == 50 == len(calls)
+    assert abs(chair.t - 1.0) < 1e-9
+    assert abs(log.t[-1] - chair.t) < 1e-9
+    with pytest.raises(ValueError, match="until must be a function"):
+        chair.run(lambda frame: None, 1.0, until=True)

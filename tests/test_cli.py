@@ -27,7 +27,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_demo_writes_plot_animation_and_log(tmp_path, capsys):
-    assert main(["demo", "--out", str(tmp_path), "--seconds", "20", "--quiet"]) == 0
+    assert main(["demo", "--mission", "wander", "--out", str(tmp_path), "--seconds", "20",
+                 "--quiet"]) == 0
     line = capsys.readouterr().out.strip().splitlines()[-1]
     assert "sonar-avoidance wander in lab" in line and "0 collisions" in line
     for name in ("demo_wander.png", "demo_wander.gif", "demo_wander.npz"):
@@ -37,7 +38,8 @@ def test_demo_writes_plot_animation_and_log(tmp_path, capsys):
 
 
 def test_demo_json_gives_the_runs_figures_and_files(tmp_path, capsys):
-    assert main(["demo", "--out", str(tmp_path), "--seconds", "2", "--quiet", "--json"]) == 0
+    assert main(["demo", "--mission", "wander", "--out", str(tmp_path), "--seconds", "2",
+                 "--quiet", "--json"]) == 0
     figures = json.loads(capsys.readouterr().out)
     log = RunLog.load(tmp_path / "demo_wander.npz")
     assert figures["seconds"] == pytest.approx(2.0) and figures["world"] == "lab"
@@ -48,9 +50,11 @@ def test_demo_json_gives_the_runs_figures_and_files(tmp_path, capsys):
 
 
 def test_demo_shows_a_progress_bar_unless_quiet(tmp_path, capsys):
-    assert main(["demo", "--out", str(tmp_path / "a"), "--seconds", "1"]) == 0
+    assert main(["demo", "--mission", "wander", "--out", str(tmp_path / "a"),
+                 "--seconds", "1"]) == 0
     assert "50/50" in capsys.readouterr().err  # 50 steps of 20 ms
-    assert main(["demo", "--out", str(tmp_path / "b"), "--seconds", "1", "--quiet"]) == 0
+    assert main(["demo", "--mission", "wander", "--out", str(tmp_path / "b"),
+                 "--seconds", "1", "--quiet"]) == 0
     assert capsys.readouterr().err == ""
 
 
@@ -88,7 +92,7 @@ def test_version_is_the_packages():
 
 def test_every_command_takes_quiet_and_debug_and_the_figures_ones_json():
     minimal = {"demo": [], "bench": [], "course build": [], "posegraph": ["g.g2o"],
-               "slam": ["log.clf"], "navtrial": []}
+               "slam": ["log.clf"], "navtrial": [], "errands": []}
     parser = build_parser()
     for command, needed in minimal.items():
         args = parser.parse_args([*command.split(), *needed, "--quiet", "--debug"])
@@ -201,8 +205,9 @@ def test_an_out_that_is_a_file_is_refused_before_the_run(tmp_path):
 
 
 def test_a_refused_demo_leaves_no_folder_behind(tmp_path):
-    for refused in (["--seconds", "-5"], ["--seconds", "nan"], ["--world", "moon"],
-                    ["--seed", "-1"]):
+    for refused in (["--mission", "wander", "--seconds", "-5"],
+                    ["--mission", "wander", "--seconds", "nan"], ["--world", "moon"],
+                    ["--seed", "-1"], ["--to", "moon"]):
         done = run_abcwc("demo", *refused, cwd=tmp_path)
         assert done.returncode == 2, done.stderr
         assert list(tmp_path.iterdir()) == [], refused  # not even abcwc-demo/
@@ -237,7 +242,15 @@ def run_abcwc(*args: str, cwd: Path, **env: str) -> subprocess.CompletedProcess:
 USER_ERRORS = {
     "unknown world": (["demo", "--world", "moon"], {}, "unknown world 'moon'"),
     "negative seed": (["demo", "--seed", "-1"], {}, "seed must be a non-negative integer"),
-    "negative seconds": (["demo", "--seconds", "-5"], {}, "seconds must be a finite number"),
+    "negative seconds": (["demo", "--mission", "wander", "--seconds", "-5"], {},
+                         "seconds must be a finite number"),
+    "seconds for the errand": (["demo", "--seconds", "5"], {}, "--seconds is the wander's"),
+    "unknown place": (["demo", "--to", "moon"], {}, "no place 'moon' in floor; its places: "
+                      "cafeteria, corridor_east, lab, library, lift, meeting, office_a, "
+                      "reading, store"),
+    "no cafeteria": (["demo", "--world", "lab"], {}, "lab has no cafeteria: choose"),
+    "a destination for the wander": (["demo", "--mission", "wander", "--to", "lab"], {},
+                                     "--to is the errand's"),
     "world is a folder": (["demo", "--world", "."], {}, "Is a directory"),
     "missing data folder": (["demo"], {"ABCWC_DATA": "no-such-data"},
                             "ABCWC_DATA=no-such-data is not a folder"),
@@ -248,6 +261,9 @@ USER_ERRORS = {
     "no such solutions folder": (["course", "build", "--solutions", "nope"], {},
                                  "nope: no such directory"),
     "no goals": (["navtrial", "--goals", "0"], {}, "--goals must be at least 1"),
+    "no errands": (["errands", "--count", "0"], {}, "--count must be at least 1"),
+    "errands in an unknown world": (["errands", "--world", "moon"], {},
+                                    "unknown world 'moon'"),
     "navtrial in an unknown world": (["navtrial", "--world", "moon"], {},
                                      "unknown world 'moon'"),
 }

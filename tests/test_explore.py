@@ -22,7 +22,6 @@ from abcwc.behaviours.explore import (
     ExploreSettings,
     floor_map,
     frontier_cells,
-    joined,
     run_exploration,
     travel_costs,
 )
@@ -241,8 +240,6 @@ def test_bad_input_is_refused_with_what_is_allowed(tmp_path):
         Explorer((0.0, 0.0, 0.0))  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="tour point"):
         Explorer(Pose2D(0.0, 0.0, 0.0), tour=[(1.0, math.nan)])
-    with pytest.raises(ValueError, match="at least one RunLog"):
-        joined([])
     chair = SimBase(_two_rooms(tmp_path), seed=0, lidar=True, people=False)
     log = chair.run(lambda frame: None, 1.0)
     with pytest.raises(ValueError, match="scan_every"):

@@ -116,7 +116,8 @@ def test_installed_wheel_runs_the_demo_outside_the_checkout(wheel, tmp_path):
     assert Path(aces) == package / "data" / "slam" / "aces.clf.gz"
 
     out = tmp_path / "demo"
-    done = run(bin_dir / "abcwc", "demo", "--seconds", "5", "--quiet", "--out", out,
+    done = run(bin_dir / "abcwc", "demo", "--mission", "wander", "--seconds", "5", "--quiet",
+               "--out", out,
                cwd=tmp_path, env=env)
     assert "sonar-avoidance wander in lab" in done.stdout
     for name in ("demo_wander.png", "demo_wander.gif", "demo_wander.npz"):

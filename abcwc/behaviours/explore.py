@@ -43,7 +43,7 @@ import heapq
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -56,7 +56,7 @@ from abcwc.behaviours.base import LOOP_RATE_HZ, BehaviourBase, Status, finite_po
 from abcwc.behaviours.navigator import Navigator, NavigatorSettings
 from abcwc.estimation.ekf import ChairEkf
 from abcwc.geometry import compose
-from abcwc.log import RunLog, ScanLog
+from abcwc.log import RunLog
 from abcwc.mapping.build import BuiltMap, build_map, load_built_map
 from abcwc.mapping.grid import (
     FREE,
@@ -506,40 +506,26 @@ def travel_costs(weights: np.ndarray, start: int) -> np.ndarray:
 
 
 def run_exploration(chair: Base, explorer: Explorer, max_seconds: float,
-                    chunk: float = 5.0) -> RunLog:
+                    progress: bool = False) -> RunLog:
     """Run ``explorer`` on ``chair`` (through the body's safety filter, as every run is)
-    ``chunk`` s at a time until it ends or ``max_seconds`` have passed; the whole drive
-    as one RunLog."""
-    for name, value in (("max_seconds", max_seconds), ("chunk", chunk)):
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be a finite number > 0 s, got {value!r}")
-    logs: list[RunLog] = []
-    driven = 0.0
-    while explorer.running and driven < max_seconds - 1e-9:
-        seconds = min(chunk, max_seconds - driven)
-        logs.append(chair.run(explorer, seconds))
-        driven += seconds
-    return joined(logs)
+    until it ends or ``max_seconds`` have passed; the drive as one RunLog. ``progress``
+    shows a bar of the goals reached (the tour's points, or frontiers)."""
+    if not (isinstance(max_seconds, (int, float)) and math.isfinite(max_seconds)
+            and max_seconds > 0):
+        raise ValueError(f"max_seconds must be a finite number > 0 s, got {max_seconds!r}")
+    if not progress:
+        return chair.run(explorer, max_seconds, until=lambda: not explorer.running)
+    from tqdm.auto import tqdm
 
+    total = len(explorer.tour) if explorer.tour is not None else None
+    with tqdm(total=total, desc="mapping the floor", unit="goal") as bar:
 
-def joined(logs: Sequence[RunLog]) -> RunLog:
-    """Consecutive runs of one body as one RunLog: the channels one after another, each
-    sensor's scans too (a scan two runs both recorded, kept once), the first run's meta."""
-    if not logs:
-        raise ValueError("joined needs at least one RunLog")
-    names = list(logs[0].channels)
-    if any(list(log.channels) != names for log in logs):
-        raise ValueError("the logs must have the same channels to be joined")
-    channels = {name: np.concatenate([log.channels[name] for log in logs]) for name in names}
-    scans: dict[str, ScanLog] = {}
-    for frame_id in logs[0].scans:
-        parts = [log.scans[frame_id] for log in logs if frame_id in log.scans]
-        stamps = np.concatenate([part.stamps for part in parts])
-        ranges = np.concatenate([part.ranges for part in parts])
-        _, first = np.unique(stamps, return_index=True)
-        first = np.sort(first)
-        scans[frame_id] = replace(parts[0], stamps=stamps[first], ranges=ranges[first])
-    return RunLog(channels, meta=logs[0].meta, scans=scans)
+        def ended() -> bool:
+            if len(explorer.visits) > bar.n:
+                bar.update(len(explorer.visits) - bar.n)
+            return not explorer.running
+
+        return chair.run(explorer, max_seconds, until=ended)
 
 
 SLAM_END_STD = (0.02, 0.02, 0.005)
@@ -567,21 +553,22 @@ class MappedFloor:
 
 def floor_map(chair: Base, path: str | Path, start: Pose2D,
               tour: Sequence[tuple[float, float]] | None = None, ekf: ChairEkf | None = None,
-              settings: ExploreSettings | None = None, max_seconds: float = 900.0
-              ) -> MappedFloor:
+              settings: ExploreSettings | None = None, max_seconds: float = 900.0,
+              progress: bool = False) -> MappedFloor:
     """The map of the floor ``chair`` stands on at ``start`` (its known pose, e.g. a
     world's start place): the saved map at ``path`` (a ``.yaml``, map_server files) if
     there is one, a known floor; else the chair maps the floor by ``tour`` or by
     frontiers (:class:`Explorer`, at most ``max_seconds`` s), builds the map with graph
-    SLAM (:func:`~abcwc.mapping.build.build_map`) and saves it there. A mapping run that
-    failed or did not end in time raises :class:`RuntimeError` saying why."""
+    SLAM (:func:`~abcwc.mapping.build.build_map`) and saves it there (``progress``: a bar
+    of the goals reached). A mapping run that failed or did not end in time raises
+    :class:`RuntimeError` saying why."""
     clock = time.perf_counter()
     path = Path(path)
     if path.exists():
         return MappedFloor(load_built_map(path), None, None, time.perf_counter() - clock,
                            start, ekf)
     explorer = Explorer(start, tour, chair.params, ekf, settings)
-    log = run_exploration(chair, explorer, max_seconds)
+    log = run_exploration(chair, explorer, max_seconds, progress)
     if explorer.status is Status.FAILED:
         raise RuntimeError(f"mapping the floor failed: {explorer.failure}")
     if explorer.running:

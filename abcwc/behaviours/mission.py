@@ -329,14 +329,13 @@ class Mission(BehaviourBase):
     def for_map(cls, cells: np.ndarray, grid: GridGeometry, start: Pose2D,
                 places: dict[str, Pose2D], params: ChairParams | None = None,
                 follower: Behaviour | None = None, events: Sequence[PlaceEvent] | None = None,
-                settings: NavigatorSettings | None = None,
-                rules: Rule = next_state, ekf: ChairEkf | None = None) -> Mission:
+                settings: NavigatorSettings | None = None, ekf: ChairEkf | None = None,
+                rules: Rule = next_state) -> Mission:
         """A mission on a built map (trinary ``cells`` on ``grid``, as
-        :meth:`Navigator.for_map`) with the named ``places`` (m, rad), from ``start``;
-        ``settings`` as :meth:`for_world`; ``ekf`` the localiser's filter (default:
-        nominal odometry from ``start``; after mapping, the one the mapping run hands
-        back on the map's frame, :attr:`MappedFloor.ekf
-        <abcwc.behaviours.explore.MappedFloor.ekf>`)."""
+        :meth:`Navigator.for_map`) with the named ``places`` (m, rad), from ``start``,
+        its localiser's filter ``ekf`` (default: nominal odometry from ``start``; after
+        mapping, the filter the mapping drove by, moved onto the map's frame);
+        ``settings`` as :meth:`for_world`; ``rules`` the transitions (:func:`next_state`)."""
         settings = settings or NavigatorSettings(relocalise_turn=RELOCALISE_TURN)
         navigator = Navigator.for_map(cells, grid, start, params, ekf=ekf, settings=settings)
         navigator.places = dict(places)

@@ -33,6 +33,7 @@ Bad frames from the chair are counted (``SensorFrame.bad_frames``), never raised
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 
 from abcwc.base import BODY_FILTER, BodyMixin, Controller, SafetyChoice
 from abcwc.control.interface_board import check_speed_cap
@@ -135,8 +136,10 @@ class LinkedBody(BodyMixin):
         self.link.set_speed_cap(offset)
 
     def run(self, controller: Controller, seconds: float, progress: bool = False,
-            safety: SafetyChoice = BODY_FILTER) -> RunLog:
-        """Call ``controller(frame)`` every period for ``seconds``; send what it returns
+            safety: SafetyChoice = BODY_FILTER,
+            until: Callable[[], bool] | None = None) -> RunLog:
+        """Call ``controller(frame)`` every period for ``seconds`` (or until ``until()``
+        says True); send what it returns
         through the safety filter (:meth:`abcwc.base.BodyMixin.run`).
 
         The controller returns a PotCommand, a Twist, or None (send nothing: after
@@ -144,7 +147,7 @@ class LinkedBody(BodyMixin):
         can still hear) and raises ChairLinkError.
         """
         try:
-            return super().run(controller, seconds, progress, safety)
+            return super().run(controller, seconds, progress, safety, until)
         except BaseException:
             try:
                 self.stop()

@@ -143,13 +143,14 @@ def lift_run():
 
 
 def test_the_lift_route_fires_twice_by_the_true_track(lift_run):
-    """Worked by hand: the first leg comes within 3 m (1); (22.0, 9.5) is 3.75 m from
-    the lift (24.25, 12.5), not beyond 4 m, so the way back does not fire; (19, 9) is
-    6.31 m away, so the last leg fires again (2)."""
+    """Worked by hand: the first leg comes within 3 m (1); (21.3, 9.4) is 3.36 m from
+    the lift (24.25, 11.0), not beyond 4 m, so the way back does not fire; (19, 9) is
+    5.62 m away, so the last leg fires again (2)."""
     log, mission = lift_run
     lift = mission.destinations["lift"]
-    assert math.hypot(22.0 - lift.x, 9.5 - lift.y) == pytest.approx(3.75)
-    assert math.hypot(19.0 - lift.x, 9.0 - lift.y) == pytest.approx(6.31, abs=0.01)
+    assert (lift.x, lift.y) == (24.25, 11.0)
+    assert math.hypot(21.3 - lift.x, 9.4 - lift.y) == pytest.approx(3.36, abs=0.01)
+    assert math.hypot(19.0 - lift.x, 9.0 - lift.y) == pytest.approx(5.62, abs=0.01)
     assert len(mission.events_fired) == 2
     assert mission.state is S.ARRIVED
 

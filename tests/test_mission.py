@@ -553,3 +553,13 @@ def test_a_mission_on_a_built_map_drives_by_the_filter_it_is_given():
     assert mission.navigator.localizer.pose.x == pytest.approx(start.x + 0.3)
     plain = Mission.for_map(cells, grid, start, places=chair.world.places)
     assert plain.navigator.localizer.pose.x == pytest.approx(start.x)
+
+
+def test_a_command_before_the_first_frame_is_stamped_with_the_first_frames_time():
+    chair = SimBase("lab", seed=0, lidar=True, people=False)
+    chair.run(lambda frame: Twist(0.0, 0.0), 5.0)  # the chair's clock has run on
+    mission = Mission.for_world(chair.world, chair=chair)
+    mission.go_to("centre")
+    assert math.isnan(mission.transitions[0].t)  # not seen a frame: no time yet
+    log = chair.run(mission, 0.1)
+    assert mission.transitions[0].t == pytest.approx(5.0) == log.t[0] - chair.period

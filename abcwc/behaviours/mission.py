@@ -61,7 +61,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 from typing import TYPE_CHECKING
 
@@ -113,7 +113,8 @@ class MissionState(str, Enum):
 @dataclass(frozen=True)
 class Transition:
     """The mission went from ``before`` to ``after`` at frame time ``t`` (s) because of
-    ``reason`` (a short sentence)."""
+    ``reason`` (a short sentence). A command given before the mission has seen a frame
+    is stamped with the first frame's time."""
 
     t: float
     before: MissionState
@@ -297,7 +298,7 @@ class Mission(BehaviourBase):
         self._blocking: np.ndarray | None = None  # the cells that block the way, waiting
         self._blocking_from: tuple[object, int] | None = None  # from: local costmap, avoided
         self._subscribers: list[Callable[[MissionEvent], None]] = []
-        self._now = 0.0
+        self._now = math.nan  # s, the newest frame's time (none seen yet)
         self._active: Behaviour | None = None  # the navigator or the follower, on an errand
         self._armed: dict[int, bool | None] = dict.fromkeys(range(len(self.events)))
         self._unlogged_reasons: list[str] = []
@@ -424,6 +425,9 @@ class Mission(BehaviourBase):
         return fields
 
     def observe(self, frame: SensorFrame) -> None:
+        if math.isnan(self._now):  # commands given before the first frame count from it
+            self.transitions = [replace(tr, t=frame.t) if math.isnan(tr.t) else tr
+                                for tr in self.transitions]
         self._now = frame.t
         if not self.running:  # cancelled: the localiser still keeps the chair's place
             self.navigator.observe(frame)

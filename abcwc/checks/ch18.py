@@ -60,9 +60,10 @@ __all__ = [
 ]
 
 ENDED = (MissionState.ARRIVED, MissionState.FAILED)
-LIFT_ROUTE = ("lift", (22.0, 9.5), "lift", (19.0, 9.0), "lift")
+LIFT_ROUTE = ("lift", (21.3, 9.4), "lift", (19.0, 9.0), "lift")
 """The errands of exercise 2, one after the other, from (19, 9) on the floor world: to
-the lift, to a point 3.75 m from it, back, to a point 6.3 m from it, and back."""
+the lift (24.25, 11.0), to a point 3.36 m from it, back, to a point 5.62 m from it, and
+back."""
 LIFT_START = Pose2D(19.0, 9.0, 0.0)
 FALSE_SELECTIONS = 0.05
 """Exercise 3: at most one selection in 20 false."""

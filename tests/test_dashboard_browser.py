@@ -20,6 +20,7 @@ from pathlib import Path
 import nbformat
 import pytest
 
+from abcwc.ui.dashboard import VOILA_OPTIONS
 from tests.test_panel_browser import CHROMIUM, _free_port, _require_browser
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -95,16 +96,14 @@ def lab(tmp_path) -> Iterator[str]:
 @pytest.fixture
 def voila(tmp_path) -> Iterator[tuple[str, Path]]:
     """Voila serving the dashboard notebook as a standalone page (second commands
-    refused), with idle kernels culled as the backstop for a page that vanished."""
+    refused), with the dashboard's options that release a closed page's kernel."""
     _require_browser()
     _notebook(tmp_path / "dashboard.ipynb", on_busy="refuse")
     port = _free_port()
     url = f"http://127.0.0.1:{port}/"
     server = _serve(
         [sys.executable, "-m", "voila", str(tmp_path / "dashboard.ipynb"), "--no-browser",
-         f"--port={port}", "--Voila.ip=127.0.0.1",
-         "--MappingKernelManager.cull_interval=10",
-         "--MappingKernelManager.cull_idle_timeout=30"], port,
+         f"--port={port}", "--Voila.ip=127.0.0.1", *VOILA_OPTIONS], port,
         tmp_path / "server.log")
     try:
         yield url, tmp_path / "kernel.pid"

@@ -19,7 +19,8 @@ The logic here is plain Python with an explicit clock (s), so it is tested witho
 browser. :class:`FrontEnd` is the small browser hook (an anywidget, which runs in
 JupyterLab and in Voila alike): ipywidgets has no hover event and no document-wide key
 press, so it reports the pointer entering and leaving the option buttons (marked with
-CSS classes), the switch key while scanning is on, and ``window.devicePixelRatio``.
+CSS classes), the switch key while scanning is on, ``window.devicePixelRatio``, and
+that the page is being closed.
 """
 
 from __future__ import annotations
@@ -184,10 +185,14 @@ function render({ model, el }) {
     event.preventDefault();
     event.stopPropagation();
   };
+  // the page is going (closed, reloaded, left): the kernel may still drive a chair
+  const leaving = () => model.send({ event: "page closed" });
   document.addEventListener("pointerover", over, true);
   document.addEventListener("keydown", keyDown, true);
   document.addEventListener("keyup", keyUp, true);
+  window.addEventListener("beforeunload", leaving);
   return () => {
+    window.removeEventListener("beforeunload", leaving);
     document.removeEventListener("pointerover", over, true);
     document.removeEventListener("keydown", keyDown, true);
     document.removeEventListener("keyup", keyUp, true);
@@ -201,7 +206,8 @@ export default { render };
 class FrontEnd(anywidget.AnyWidget):
     """The invisible browser hook (module notes). Options are elements with the CSS
     classes ``token`` and ``token-<option>``; messages arrive through ``on_msg`` as
-    ``{"event": "enter" | "leave", "option": name}`` and ``{"event": "switch"}``."""
+    ``{"event": "enter" | "leave", "option": name}``, ``{"event": "switch"}`` and, when
+    the page is closed or left, ``{"event": "page closed"}``."""
 
     _esm = _ESM
     token = traitlets.Unicode("").tag(sync=True)

@@ -42,16 +42,19 @@ trade: the longest wait is ``scan_seconds`` x the number of options (half that o
 average), so a fast scan saves time but asks for a quick, exact press, and a rider who
 is slow to press picks the neighbour.
 
-**Standalone (Voila).** Serve a notebook whose last line is a dashboard::
+**Standalone (Voila).** Serve a notebook whose last line is a dashboard with
+:data:`VOILA_OPTIONS`::
 
-    voila dashboard.ipynb --MappingKernelManager.cull_interval=10 \\
-        --MappingKernelManager.cull_idle_timeout=60
+    voila dashboard.ipynb --MappingKernelManager.cull_interval=5 \\
+        --MappingKernelManager.cull_idle_timeout=10
 
-Closing the page shuts its kernel down (Voila asks the server to on ``beforeunload``);
-the culling settings are the backstop for a page that vanished without saying so (a
-crashed browser): a kernel with no connection and idle for a minute is shut down. The
-dashboard stops its drive task once the chair is still, so a forgotten page's kernel is
-idle and can be culled.
+Closing or leaving the page first stops the chair (the browser hook says the page is
+going). Then the kernel must go: Voila's own shutdown request on closing (Voila 0.5.13)
+is refused by its server (HTTP 403, the page carries no ``_xsrf`` cookie), so the
+culling settings release it: the server shuts down a kernel that has no page connected
+and has been idle for 10 s, checking every 5 s (a kernel with its page open is never
+culled: ``cull_connected`` stays False). The dashboard's tasks end once the chair is
+still and scanning ends after its rounds, so a closed page's kernel falls idle.
 """
 
 from __future__ import annotations
@@ -71,6 +74,9 @@ from abcwc.ui.map_view import MapView
 DRIVING_STATES = frozenset({"localising", "navigating", "following", "waiting"})
 """The mission states (MissionState values) in which the mission moves the chair."""
 ON_BUSY = ("queue", "refuse")
+VOILA_OPTIONS = ("--MappingKernelManager.cull_interval=5",
+                 "--MappingKernelManager.cull_idle_timeout=10")
+"""Voila's options for a dashboard page: release a kernel 10-15 s after its page went."""
 STOP = "stop"
 STILL_WINDOW = 0.3  # s: the chair is still when its estimate moved less than
 STILL_DISTANCE = 0.005  # m and
@@ -443,6 +449,9 @@ class Dashboard:
         elif event == "leave":
             self.dwell.leave(option, now)
             self._light()
+        elif event == "page closed":
+            if self.busy or self.driving:
+                self.stop("the page was closed")
         elif event == "switch":
             option = self.scanner.press(now)
             if option is not None:

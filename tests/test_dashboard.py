@@ -1,0 +1,316 @@
+"""The dashboard's logic without a browser: errands checked against the simulator's
+truth, the queue and refusal, stop, typed commands, the asyncio drive's pacing and
+redraw rate, dwell and switch scanning (their clocks and the browser hook's messages),
+and a map drawn at its shown size. The browser tests are tests/test_dashboard_browser.py."""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import math
+import time
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from abcwc.sim import SimBase
+from abcwc.sim.world import load_world
+from abcwc.ui.access import DwellSelector, SwitchScanner
+from abcwc.ui.dashboard import Dashboard
+from abcwc.ui.map_view import CSS_DPI, MapView
+from abcwc.ui.teleop import TeleopPanel
+from tests.mission_stand_in import StandInMission
+
+LAB = load_world("lab").places
+
+
+def _dashboard(**options: object) -> Dashboard:
+    chair = SimBase("lab", seed=1, lidar=True, people=False)
+    options.setdefault("time_scale", math.inf)
+    return Dashboard(chair, StandInMission.for_world(chair.world), **options)
+
+
+def _distance(pose: object, place: str) -> float:
+    return math.hypot(pose.x - LAB[place].x, pose.y - LAB[place].y)
+
+
+async def _until(condition, seconds: float = 30.0) -> None:
+    """Let the event loop run until ``condition()`` holds (wall ``seconds`` at most)."""
+    deadline = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < deadline, "timed out"
+        await asyncio.sleep(0.005)
+
+
+async def _drive_ends(d: Dashboard) -> None:
+    while d.driving:
+        await d._task
+
+
+def _rests(d: Dashboard, periods: int = 25) -> float:
+    """m the chair's true pose moves over ``periods`` more periods of the mission."""
+    before = d.chair.pose
+    for _ in range(periods):
+        d.chair.send(d.mission(d.frame), d.mission.decided_at)
+        d.frame = d.chair.step()
+    return math.hypot(d.chair.pose.x - before.x, d.chair.pose.y - before.y)
+
+
+# ---------------------------------------------------------------- errands
+def test_a_destination_button_drives_the_chair_there():
+    async def errand():
+        d = _dashboard()
+        d.buttons["centre"].click()
+        assert d.driving and "started" in d.notice_line.value
+        await _drive_ends(d)
+        return d
+
+    d = asyncio.run(errand())
+    assert _distance(d.chair.pose, "centre") < 0.35  # the navigator's tolerance and some
+    assert d.mission.state == "arrived" and "arrived" in d.state_line.value
+    assert _rests(d) < 0.01
+    assert "moving at 0.0" in d.truth_line.value
+
+
+def test_a_second_command_while_driving_is_queued_then_run():
+    async def errands():
+        d = _dashboard(on_busy="queue")
+        d.choose("centre")
+        await _until(lambda: d.frame.t > 2.0)
+        d.buttons["bench"].click()
+        notice = d.notice_line.value
+        assert d.queued is not None
+        await _drive_ends(d)
+        return d, notice
+
+    d, notice = asyncio.run(errands())
+    assert "queued" in notice and "go to the bench" in notice and "centre" in notice
+    assert [t.after for t in d.mission.transitions] == ["navigating", "arrived",
+                                                        "navigating", "arrived"]
+    assert _distance(d.chair.pose, "bench") < 0.35
+    assert d.queued is None
+
+
+def test_a_second_command_while_driving_is_refused_when_so_set():
+    async def errands():
+        d = _dashboard(on_busy="refuse")
+        d.choose("centre")
+        await _until(lambda: d.frame.t > 2.0)
+        d.command("go to the bench")
+        notice = d.notice_line.value
+        await _drive_ends(d)
+        return d, notice
+
+    d, notice = asyncio.run(errands())
+    assert "refused" in notice and "go to the bench" in notice and "press stop" in notice
+    assert [t.after for t in d.mission.transitions] == ["navigating", "arrived"]
+    assert _distance(d.chair.pose, "centre") < 0.35
+
+
+def test_stop_mid_drive_stops_the_chair_and_drops_the_queue():
+    async def errand():
+        d = _dashboard()
+        d.choose("door")
+        await _until(lambda: d.frame.t > 3.0)
+        d.choose("table")  # queued
+        speed = d._truth_speed
+        d.stop_button.click()
+        await _drive_ends(d)
+        return d, speed
+
+    d, speed = asyncio.run(errand())
+    assert speed > 0.2  # it was driving when stop was pressed
+    assert d.mission.state == "idle" and d.queued is None
+    assert "dropped the queued" in d.notice_line.value
+    assert _distance(d.chair.pose, "door") > 1.0
+    assert _rests(d) < 0.01
+
+
+def test_typed_commands_go_through_the_grammar():
+    async def typed():
+        d = _dashboard()
+        d.command_box.value = "fly to the moon"
+        refused = d.notice_line.value
+        d.command_box.value = "Go to the table."
+        assert d.command_box.value == ""
+        await _drive_ends(d)
+        return d, refused
+
+    d, refused = asyncio.run(typed())
+    assert "is not a command" in refused and "go to the table" in refused
+    assert d.mission.transitions[0].reason == '"go to the table"'
+    assert _distance(d.chair.pose, "table") < 0.35
+
+
+def test_the_drive_yields_to_the_event_loop_and_keeps_real_time():
+    """At real time the drive task sleeps between chunks: other coroutines (the widget
+    messages' handlers) run meanwhile, the simulated clock keeps to the wall clock and
+    the map is redrawn at least 5 times a second, each time a different picture."""
+    pictures = []
+
+    async def drive():
+        d = _dashboard(time_scale=1.0)
+        d.map.image.observe(lambda change: pictures.append(change["new"]), names="value")
+        ticks = 0
+        d.choose("door")
+        start, t0 = time.monotonic(), d.frame.t
+        while time.monotonic() - start < 2.0:
+            await asyncio.sleep(0.01)
+            ticks += 1
+        simulated = d.frame.t - t0
+        d.stop()
+        await _drive_ends(d)
+        return d, ticks, simulated
+
+    d, ticks, simulated = asyncio.run(drive())
+    assert ticks > 100  # a 10 ms ticker ran all along
+    assert simulated == pytest.approx(2.0, abs=0.3)
+    assert d.redraw_rate() >= 5.0
+    assert len(pictures) >= 10 and len(set(pictures)) >= 0.9 * len(pictures)
+
+
+# ---------------------------------------------------------------- access
+def test_dwell_picks_once_after_the_dwell_time():
+    dwell = DwellSelector(0.8)
+    dwell.enter("table", 10.0)
+    assert dwell.poll(10.7) is None and dwell.progress(10.4) == pytest.approx(0.5)
+    assert dwell.poll(10.8) == "table"
+    assert dwell.poll(12.0) is None  # once per dwell
+    dwell.leave("table", 12.1)
+    dwell.enter("table", 12.2)
+    dwell.leave("table", 12.9)  # left before the time: nothing
+    assert dwell.poll(13.5) is None
+    dwell.enter("door", 14.0)
+    dwell.picked("door")  # clicked: the dwell picks nothing more
+    assert dwell.poll(15.0) is None
+    with pytest.raises(ValueError, match="dwell_seconds"):
+        DwellSelector(0.0)
+
+
+def test_switch_scanning_lights_each_option_in_turn_and_ends_after_its_rounds():
+    scan = SwitchScanner(["a", "b", "c"], scan_seconds=0.5, rounds=2)
+    assert scan.lit(0.0) is None and not scan.scanning(0.0)
+    scan.start(10.0)
+    assert [scan.lit(10.0 + 0.5 * k + 0.1) for k in range(7)] == \
+        ["a", "b", "c", "a", "b", "c", None]
+    assert scan.next_change(10.6) == pytest.approx(11.0)
+    assert scan.longest_wait == pytest.approx(1.5)
+    assert scan.press(11.2) == "c"  # and starts again from the first
+    assert scan.lit(11.3) == "a"
+    with pytest.raises(ValueError, match="rounds"):
+        SwitchScanner(["a"], rounds=0)
+    with pytest.raises(ValueError, match="at least one option"):
+        SwitchScanner([])
+
+
+def test_dwell_and_the_switch_pick_through_the_browser_hooks_messages():
+    async def access():
+        d = _dashboard(dwell_seconds=0.3, scan_seconds=0.15)
+        d._on_front_end(None, {"event": "enter", "option": "table"}, None)
+        await asyncio.sleep(0.5)
+        off = d.mission.transitions[:]  # dwell is off by default: nothing picked
+        d.dwell_toggle.value = True
+        d._on_front_end(None, {"event": "leave", "option": "table"}, None)
+        d._on_front_end(None, {"event": "enter", "option": "table"}, None)
+        await asyncio.sleep(0.15)
+        early = d.mission.transitions[:]
+        await _until(lambda: d.mission.state == "navigating", 2.0)
+        d._on_front_end(None, {"event": "leave", "option": "table"}, None)
+        d.stop()
+        await _drive_ends(d)
+        d.scan_toggle.value = True
+        assert d.front_end.scanning
+        await _until(lambda: "bench</b> is lit" in d.access_line.value, 2.0)  # as seen
+        assert d.buttons["bench"].button_style == "warning"
+        d._on_front_end(None, {"event": "switch"}, None)
+        picked = d.mission.transitions[-1].reason
+        d.stop()
+        await _drive_ends(d)
+        # three rounds of six options at 0.15 s, then scanning switches itself off
+        await _until(lambda: not d.scan_toggle.value, 5.0)
+        return d, off, early, picked
+
+    d, off, early, picked = asyncio.run(access())
+    assert off == [] and early == []
+    assert d.mission.transitions[0].reason == "table picked by dwell"
+    assert picked == "bench picked by switch"
+    assert not d.front_end.scanning and "scanning ended" in d.access_line.value
+    assert ("switch", "bench") in d.picks
+
+
+def test_closing_the_page_stops_the_chair():
+    async def closing():
+        d = _dashboard()
+        d.choose("door")
+        await _until(lambda: d.frame.t > 2.0)
+        d._on_front_end(None, {"event": "page closed"}, None)
+        await _drive_ends(d)
+        return d
+
+    d = asyncio.run(closing())
+    assert d.mission.state == "idle" and d.mission.reason == "the page was closed"
+    assert _distance(d.chair.pose, "door") > 1.0
+
+
+# ---------------------------------------------------------------- drawing
+def _png_size(png: bytes) -> tuple[int, int]:
+    return Image.open(io.BytesIO(png)).size
+
+
+def test_the_map_is_drawn_at_its_shown_size_times_the_pixel_ratio():
+    d = _dashboard(width=700)
+    view = d.map
+    assert view.image.layout.width == "700px"
+    assert view.image.layout.height == f"{view.height}px"
+    assert _png_size(view.image.value) == (700, view.height)
+    d.front_end.pixel_ratio = 2.0  # what the browser reports
+    assert _png_size(view.image.value) == (1400, 2 * view.height)
+    # metres per CSS px the same across and up: the map is not stretched
+    (x0, y0), (x1, y1) = view.to_pixel(0.0, 0.0), view.to_pixel(10.0, 5.0)
+    assert (x1 - x0) / 10.0 == pytest.approx((y0 - y1) / 5.0, rel=0.01)
+    sizes = [text.get_fontsize() * CSS_DPI / 72.0 for text in view.ax.figure.findobj(
+        lambda artist: hasattr(artist, "get_fontsize") and artist.get_text())]
+    assert len(sizes) > 10 and min(sizes) >= 11.0
+
+
+def test_the_chair_is_drawn_over_the_goal_ring():
+    view = MapView(_dashboard().navigator.global_costmap, None, {},
+                   SimBase("lab").params, width=760)
+    goal = LAB["centre"]
+    ring = view._goal.get_markersize() * CSS_DPI / 72.0 / 2  # the ring's radius, CSS px
+    ring_css = view.to_pixel(goal.x, goal.y)[0] + ring, view.to_pixel(goal.x, goal.y)[1]
+
+    def pixel(png: bytes) -> np.ndarray:
+        image = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=int)
+        return image[round(ring_css[1]), round(ring_css[0])]
+
+    ring_alone = pixel(view.draw(None, goal=goal))
+    under_chair = pixel(view.draw(goal, goal=goal))
+    orange = np.array([255, 127, 14])
+    assert np.abs(ring_alone - orange).sum() < 60
+    assert np.abs(under_chair - orange).sum() > 150
+
+
+def test_the_teleop_panel_is_sharp_at_its_size():
+    panel = TeleopPanel(SimBase("lab"), size=(600, 400))
+    assert panel.image.layout.width == "600px" and panel.image.layout.height == "400px"
+    assert _png_size(panel.image.value) == (600, 400)
+    panel.front_end.pixel_ratio = 2.0
+    assert _png_size(panel.image.value) == (1200, 800)
+    with pytest.raises(ValueError, match="size"):
+        TeleopPanel(SimBase("lab"), size=(100, 50))
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"on_busy": "ignore"}, "on_busy must be one of"),
+    ({"yield_periods": 0}, "yield_periods"),
+    ({"time_scale": 0.0}, "time_scale"),
+    ({"redraw_hz": -1.0}, "redraw_hz"),
+    ({"dwell_seconds": float("nan")}, "dwell_seconds"),
+    ({"scan_rounds": 0}, "rounds"),
+    ({"width": 100}, "width"),
+])
+def test_bad_options_are_refused_saying_what_is_allowed(options, message):
+    with pytest.raises(ValueError, match=message):
+        _dashboard(**options)

@@ -42,7 +42,7 @@ def _notebook(path: Path, on_busy: str) -> None:
         "from tests.mission_stand_in import StandInMission\n"
         "chair = SimBase('lab', seed=1, lidar=True, people=False)\n"
         "dashboard = Dashboard(chair, StandInMission.for_world(chair.world),\n"
-        f"                      dwell_seconds=0.8, scan_seconds=0.7, on_busy={on_busy!r})\n"
+        f"                      dwell_seconds=0.8, scan_seconds=1.0, on_busy={on_busy!r})\n"
         "dashboard")]
     notebook.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
                                        "language": "python"}

@@ -223,7 +223,7 @@ class Dashboard:
             if task is not None:
                 task.cancel()
         self.chair.stop()
-        self.widget.close_all() if hasattr(self.widget, "close_all") else self.widget.close()
+        _close_tree(self.widget)
 
     # ------------------------------------------------------------------ commands
     @property
@@ -239,6 +239,7 @@ class Dashboard:
     def choose(self, option: str, how: str = "button") -> None:
         """``option`` (a destination or ``"stop"``) was picked ``how`` ("button",
         "dwell", "switch")."""
+        _event_loop()  # before anything changes
         self.picks.append((how, option))
         if how != "dwell":
             self.dwell.picked(option)
@@ -255,6 +256,7 @@ class Dashboard:
     def command(self, text: str | SpokenCommand) -> None:
         """A typed command, in the mission's grammar; a phrase it does not know is
         shown with the list of those it does."""
+        _event_loop()  # before anything changes
         try:
             spoken = text if isinstance(text, SpokenCommand) else self.commands.parse(text)
         except ValueError as error:
@@ -262,14 +264,15 @@ class Dashboard:
             return
         if spoken.phrase == STOP:
             self.queued = None
-            self.mission.command(spoken)
+            self.mission.command(text)
             self._say("stopped (typed); nothing queued")
             self._start_drive()
             return
-        self._request(spoken.phrase, lambda: self.mission.command(spoken))
+        self._request(spoken.phrase, lambda: self.mission.command(text))
 
     def stop(self, reason: str = "stop pressed") -> None:
         """Stop at once (the chair brakes through the safety filter) and empty the queue."""
+        _event_loop()  # before anything changes
         dropped = self.queued
         self.queued = None
         self.mission.stop(reason)
@@ -320,9 +323,8 @@ class Dashboard:
     # ------------------------------------------------------------------ driving
     def _start_drive(self) -> None:
         """Run the drive task on the running event loop unless it already runs."""
-        if self.driving:
-            return
-        self._task = asyncio.get_running_loop().create_task(self._drive())
+        if not self.driving:
+            self._task = _event_loop().create_task(self._drive())
 
     async def _drive(self) -> None:
         """Step the body, keeping to ``time_scale``, until the mission stops driving and
@@ -444,7 +446,7 @@ class Dashboard:
         if event == "enter" and option in self.buttons and self.dwell_toggle.value:
             self.dwell.enter(option, now)
             self._light()
-            asyncio.get_running_loop().call_later(self.dwell.dwell_seconds + 0.02,
+            _event_loop().call_later(self.dwell.dwell_seconds + 0.02,
                                                   self._dwell_check)
         elif event == "leave":
             self.dwell.leave(option, now)
@@ -467,7 +469,7 @@ class Dashboard:
         if change["new"]:
             self.scanner.start(time.monotonic())
             self.front_end.scanning = True
-            self._scan_task = asyncio.get_running_loop().create_task(self._scan())
+            self._scan_task = _event_loop().create_task(self._scan())
         else:
             self.scanner.stop()
             self.front_end.scanning = False
@@ -509,3 +511,19 @@ class Dashboard:
         key = self.front_end.switch_key
         return "space" if key == " " else key
 
+
+def _event_loop() -> asyncio.AbstractEventLoop:
+    """The running event loop; RuntimeError saying what is needed when none runs."""
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        raise RuntimeError("the dashboard drives from a running asyncio event loop (a "
+                           "Jupyter kernel's, or one started with asyncio.run); there is "
+                           "none here") from None
+
+
+def _close_tree(widget: object) -> None:
+    """Close ``widget`` and every widget inside it."""
+    for child in getattr(widget, "children", ()):
+        _close_tree(child)
+    widget.close()

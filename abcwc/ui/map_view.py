@@ -24,7 +24,7 @@ from abcwc.types import Pose2D
 
 CSS_DPI = 96.0
 """A CSS pixel is 1/96 inch."""
-MARGINS = (44, 8, 10, 30)
+MARGINS = (58, 8, 10, 34)
 """CSS px around the map (left, right, top, bottom): room for the axes' labels."""
 
 
@@ -111,7 +111,10 @@ class MapView:
                                              colors="0.2", linewidths=1.5, zorder=2))
         for name, place in self.places.items():
             ax.plot([place.x], [place.y], "o", color="tab:purple", markersize=3, zorder=3)
-            ax.annotate(name.replace("_", " "), (place.x, place.y), xytext=(4, 3),
+            # a name in the right quarter goes on the place's left, inside the map
+            left = place.x > self.extent[0] + 0.75 * (self.extent[1] - self.extent[0])
+            ax.annotate(name.replace("_", " "), (place.x, place.y),
+                        xytext=(-4 if left else 4, 3), ha="right" if left else "left",
                         textcoords="offset points", fontsize=size, color="tab:purple",
                         zorder=3)
         ax.set_xlim(*self.extent[:2])

@@ -267,6 +267,25 @@ def test_it_drives_the_firmware_in_the_loop_body_the_same_way():
         chair.close()
 
 
+def test_the_safety_filters_last_intervention_is_shown():
+    async def deflected():
+        d = _dashboard()
+        d.choose("door")
+        await _until(lambda: d.frame.t > 2.0)
+        before = d.safety_line.value
+        d.chair.set_joystick(fb=128, lr=180)  # a hand on the joystick: it wins
+        await _until(lambda: d.frame.t > 2.6)
+        d.chair.release_joystick()
+        d.stop()
+        await _drive_ends(d)
+        return d, before
+
+    d, before = asyncio.run(deflected())
+    assert before == "safety filter: no intervention yet"
+    assert "last intervention at t = " in d.safety_line.value
+    assert "joystick" in d.safety_line.value
+
+
 def test_closing_the_page_stops_the_chair():
     async def closing():
         d = _dashboard()

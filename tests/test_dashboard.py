@@ -144,6 +144,25 @@ def test_typed_commands_go_through_the_grammar():
     assert _distance(d.chair.pose, "table") < 0.35
 
 
+def test_an_errand_that_fails_at_once_says_why():
+    from abcwc.sim.world import world_from_dict
+
+    box = world_from_dict({"name": "box", "walls": [[[0, 0], [8, 0], [8, 8], [0, 8], [0, 0]]],
+                           "places": {"start": [2.0, 2.0, 0.0], "shelf": [8.0, 4.0, 0.0]}})
+
+    async def walled():
+        chair = SimBase(box, seed=1, lidar=True, people=False)
+        d = Dashboard(chair, StandInMission.for_world(box), time_scale=math.inf)
+        d.choose("shelf")  # on the east wall
+        await _drive_ends(d)
+        return d
+
+    d = asyncio.run(walled())
+    assert d.mission.state == "failed"
+    assert "failed at once" in d.notice_line.value and "inside a wall" in d.notice_line.value
+    assert _rests(d) < 0.01
+
+
 def test_the_drive_yields_to_the_event_loop_and_keeps_real_time():
     """At real time the drive task sleeps between chunks: other coroutines (the widget
     messages' handlers) run meanwhile, the simulated clock keeps to the wall clock and

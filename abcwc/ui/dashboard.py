@@ -302,7 +302,11 @@ class Dashboard:
         except ValueError as error:
             self._say(f"\u201c{label}\u201d: {html.escape(str(error))}", "error")
             return
-        self._say(f"started \u201c{label}\u201d")
+        if _state_text(self.mission.state) == "failed":  # a goal in a wall, no path, ...
+            self._say(f"\u201c{label}\u201d failed at once: "
+                      f"{html.escape(str(self.mission.reason))}", "error")
+        else:
+            self._say(f"started \u201c{label}\u201d")
         self._start_drive()
 
     def _doing(self) -> str:

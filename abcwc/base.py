@@ -84,8 +84,10 @@ def run_controller(chair: Base, controller: Controller, seconds: float,
     the body's safety filter, stamped with the controller's ``decided_at`` when it has
     one (a behaviour deciding at 10 Hz repeats an older decision between); step; record
     the frame, the command wanted, the command sent, its pot bytes and what the filter
-    changed (the RunLog's ``safety`` channel). ``progress`` shows a tqdm bar labelled
-    "<verb> <seconds> s".
+    changed (the RunLog's ``safety`` channel). A controller with a ``log_fields()``
+    method (the mission layer's state and reasons) is asked for its short text fields
+    after each call, and each becomes a text channel of the RunLog (``""`` in rows
+    without it). ``progress`` shows a tqdm bar labelled "<verb> <seconds> s".
     """
     if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds >= 0):
         raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
@@ -96,16 +98,18 @@ def run_controller(chair: Base, controller: Controller, seconds: float,
         from tqdm.auto import tqdm
 
         iterator = tqdm(iterator, desc=f"{verb} {seconds:g} s", unit="step")
+    log_fields = getattr(controller, "log_fields", None)
     frame = chair.read()
     for _ in iterator:
         wanted = controller(frame)
+        text = log_fields() if log_fields is not None else None
         sent = pots = reason = None
         if wanted is not None:
             sent = chair.send(wanted, getattr(controller, "decided_at", None))
             pots = chair.last_command
             reason = chair.safety.reason if chair.safety is not None else None
         frame = chair.step()
-        recorder.add(frame, sent, pots, wanted=wanted, safety=reason)
+        recorder.add(frame, sent, pots, wanted=wanted, safety=reason, text=text)
     return recorder.build()
 
 

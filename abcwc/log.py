@@ -3,7 +3,10 @@
 Every channel shares the time stamps of channel ``t``; ``log.ticks`` reads channel
 ``"ticks"``. :meth:`RunLog.save` writes one ``.npz`` file that :meth:`RunLog.load`
 reads back (this format, version 2, and the fixed-field version 1 before it), so a
-class can share one recorded drive and replay it through the estimators. Camera images
+class can share one recorded drive and replay it through the estimators. Besides the
+:data:`CHANNELS` and the frames' other readings, a run may carry text channels of its
+controller's own (:meth:`LogRecorder.add`'s ``text``: the mission layer's
+``mission_state`` and ``mission``), saved and loaded with the rest. Camera images
 are not kept (a 640 x 480 image ten times a second is 300 MB in two minutes): a run
 that needs its images keeps the ones it needs itself.
 """
@@ -12,6 +15,7 @@ from __future__ import annotations
 
 import json
 import zipfile
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -299,13 +303,19 @@ class LogRecorder:
         self._extra: dict[str, dict[int, float]] = {}
         self._safety: list[str] = []
         self._wanted: list[tuple[float, float]] = []
+        self._text: dict[str, dict[int, str]] = {}
 
     def add(self, frame: SensorFrame, command: PotCommand | Twist | None,
             sent_pots: PotCommand | None, wanted: PotCommand | Twist | None = None,
-            safety: str | None = None) -> None:
+            safety: str | None = None, text: Mapping[str, str] | None = None) -> None:
         """Record one period: the frame after it, the command sent, its pot bytes, the
-        command the controller wanted (default: the one sent) and what the safety
-        filter changed (None: nothing)."""
+        command the controller wanted (default: the one sent), what the safety
+        filter changed (None: nothing) and the controller's own ``text`` fields (name ->
+        short text; each a text channel, ``""`` in rows without it)."""
+        for name, value in (text or {}).items():
+            if name in CHANNELS or not isinstance(name, str) or not isinstance(value, str):
+                raise ValueError(f"a text field is a name (not one of the channels "
+                                 f"{', '.join(CHANNELS)}) and a str, got {name!r}: {value!r}")
         truth = frame.truth
         pose = truth.pose if truth is not None else None
         twist = command if isinstance(command, Twist) else None
@@ -326,6 +336,8 @@ class LogRecorder:
             pose.theta if pose else np.nan, truth.collisions if truth is not None else 0, *ir,
         ))
         row = len(self._rows) - 1
+        for name, value in (text or {}).items():
+            self._text.setdefault(name, {})[row] = value
         for frame_id, reading in frame.readings.items():
             if frame_id == SONAR_FRAME or frame_id in IR_FRAMES or isinstance(
                     reading, CameraImage):
@@ -353,6 +365,11 @@ class LogRecorder:
             column = np.full(len(a), np.nan)
             column[list(values)] = list(values.values())
             channels[frame_id] = column
+        for name, values in self._text.items():
+            rows = [""] * len(a)
+            for row, value in values.items():
+                rows[row] = value
+            channels[name] = np.array(rows, dtype=str)
         scans = {}
         for frame_id, seen in self._scans.items():
             first = seen[0]

@@ -12,6 +12,7 @@ import pytest
 from abcwc.behaviours.base import Status
 from abcwc.behaviours.navigator import Navigator
 from abcwc.geometry import wrap_angle
+from abcwc.navigation.costmap import LETHAL
 from abcwc.navigation.dwa import DwaResult
 from abcwc.navigation.people import PeopleTracker
 from abcwc.sim import SimBase
@@ -317,3 +318,22 @@ def test_near_a_person_the_speed_is_scaled_down_along_the_same_arc(monkeypatch):
         assert command.v == pytest.approx(expected)
         assert command.w / command.v == pytest.approx(0.5)
     assert command.v == 0.8  # the last person, 8 m ahead, is far enough
+
+
+def test_avoided_cells_are_walls_until_the_next_goal():
+    """avoid() makes cells walls of the global costmap (inflated), counts only new ones,
+    refuses a grid of another shape, and the next goal forgets them."""
+    navigator = Navigator.for_world(SimBase("floor", seed=0, people=False).world)
+    navigator.go_to((14.0, 9.0, 0.0))
+    rows, cols = navigator.static_map.world_to_cell(np.array([[8.0, 9.0]]))
+    marks = np.zeros(navigator.static_map.shape, dtype=bool)
+    marks[rows[0] - 2:rows[0] + 3, cols[0] - 2:cols[0] + 3] = True
+    before = navigator.global_costmap.cost.copy()
+    assert navigator.avoid(marks) == 25 and navigator.avoid(marks) == 0
+    after = navigator.global_costmap.cost
+    assert after[rows[0], cols[0]] == LETHAL
+    assert (after >= before).all() and (after > before).sum() > 25  # inflated round them
+    with pytest.raises(ValueError, match="static map's shape"):
+        navigator.avoid(np.zeros((3, 3), dtype=bool))
+    navigator.go_to((14.0, 9.0, 0.0))
+    assert (navigator.global_costmap.cost == before).all() and not navigator.avoided.any()

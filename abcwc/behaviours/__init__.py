@@ -4,9 +4,10 @@
 :class:`BehaviourBase`, :class:`Status`), below every behaviour: the landmark goers, the
 waypoint follower, the UMBmark square driver and the sonar avoider (here), the navigator
 (:mod:`abcwc.behaviours.navigator`), the tag followers (:mod:`abcwc.behaviours.follow`),
-the sign seeker (:mod:`abcwc.behaviours.find_sign`) and voice control
-(:mod:`abcwc.behaviours.voice`). None applies the safety filter: the body's control loop
-passes every command through it.
+the sign seeker (:mod:`abcwc.behaviours.find_sign`), voice control
+(:mod:`abcwc.behaviours.voice`) and, over them, the mission layer's errands
+(:mod:`abcwc.behaviours.mission`, exported here). None applies the safety filter: the
+body's control loop passes every command through it.
 """
 
 from abcwc.behaviours.base import LOOP_RATE_HZ, Behaviour, BehaviourBase, Status
@@ -17,10 +18,21 @@ from abcwc.behaviours.landmark import (
     ThesisGoToLandmark,
     distance_and_bearing,
 )
+from abcwc.behaviours.mission import (
+    LIFT_REQUESTED,
+    Mission,
+    MissionEvent,
+    MissionState,
+    PlaceEvent,
+    Transition,
+    mission_timeline,
+)
 from abcwc.behaviours.sonar_avoid import SonarAvoider
 from abcwc.behaviours.square import SquareDriver
 from abcwc.behaviours.waypoints import FollowWaypoints, GroundTruth, floor_mixed_drive
 
-__all__ = ["LOOP_RATE_HZ", "Behaviour", "BehaviourBase", "FollowWaypoints", "GoToLandmark",
-           "GoalBehaviour", "GroundTruth", "PoseEstimator", "SonarAvoider", "SquareDriver",
-           "Status", "ThesisGoToLandmark", "distance_and_bearing", "floor_mixed_drive"]
+__all__ = ["LIFT_REQUESTED", "LOOP_RATE_HZ", "Behaviour", "BehaviourBase", "FollowWaypoints",
+           "GoToLandmark", "GoalBehaviour", "GroundTruth", "Mission", "MissionEvent",
+           "MissionState", "PlaceEvent", "PoseEstimator", "SonarAvoider", "SquareDriver",
+           "Status", "ThesisGoToLandmark", "Transition", "distance_and_bearing",
+           "floor_mixed_drive", "mission_timeline"]

@@ -19,7 +19,10 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
 4. **slows down** for the goal (no faster than it can stop from half-way into the
    tolerance), **turns to the goal's heading** once within ``xy_goal_tolerance``, and
    succeeds within ``yaw_goal_tolerance``, standing still;
-5. **recovers** when no safe trajectory is left or the chair has not moved
+5. **re-localises** when the localiser is lost: it stops and searches round its
+   estimate for where the scan fits the map (with ``relocalise_turn`` set, as the
+   mission layer sets it, turning on the spot a little between searches);
+6. **recovers** when no safe trajectory is left or the chair has not moved
    ``oscillation_distance`` in ``oscillation_timeout`` s (move_base's oscillation
    check): it waits ``controller_patience`` s for the way to clear (people move), then
    backs off a little if the IR ring sees the way behind clear, then re-plans; after
@@ -150,6 +153,7 @@ class NavigatorSettings:
     range_mark_wall_distance: float = 0.25  # m: sonar/IR marks this near a map wall are it
     range_mark_decay: float = 1.0  # s: time constant of the sonar/IR marks' fading
     relocalise_patience: float = 10.0  # s of searching for the chair's place when lost
+    relocalise_turn: float | None = None  # rad turned on the spot between searches when lost
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.15  # m/s
     max_recoveries: int = 4
@@ -205,6 +209,8 @@ class Navigator(BehaviourBase):
             braking_delay=(self.stopping.reaction_time
                            + s.acc_lim_x / self.stopping.limits.max_jerk))
         self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
+        self._map_costmap = self.global_costmap  # without what avoid() added for a goal
+        self.avoided = np.zeros(static_map.shape, dtype=bool)  # cells avoid() made walls
         self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
         self.range_layer = RangeSensorLayer(static_map)
         self._range_stamp: float | None = None
@@ -249,9 +255,12 @@ class Navigator(BehaviourBase):
         """Start driving to ``goal``: a Pose2D, an ``(x, y)`` (any heading will do), an
         ``(x, y, theta)``, or a place name. A goal off the map, in a wall, or that no
         path reaches makes the navigator fail at once, saying which."""
+        goal_pose = _place(self.places, goal)
         self.reset()
         self._clear_goal_state()
-        self.goal = _place(self.places, goal)
+        self.global_costmap = self._map_costmap  # what avoid() added was for the last goal
+        self.avoided = np.zeros(self.static_map.shape, dtype=bool)
+        self.goal = goal_pose
         self._keep_heading = not (isinstance(goal, tuple) and len(goal) == 2)
         gx, gy = self.goal.x, self.goal.y
         rows, cols = self.global_costmap.world_to_cell(np.array([[gx, gy]]))
@@ -272,6 +281,44 @@ class Navigator(BehaviourBase):
     def cancel(self) -> None:
         """Stop driving to the goal (status failed, reason "cancelled")."""
         super().cancel()
+
+    def seen_off_map(self) -> np.ndarray:
+        """(height, width) bool on the static map: the cells the newest scan marks
+        farther than ``range_mark_wall_distance`` from the map's walls (nearer, they are
+        the wall's own echo), the tracked people's discs (and 0.3 m round them) left out:
+        what blocks the way that the map does not have (all False before a decision)."""
+        if self.local_costmap is None:
+            return np.zeros(self.static_map.shape, dtype=bool)
+        marks = (self._seen_on_map(self.local_costmap)
+                 & (self._wall_distance > self.settings.range_mark_wall_distance))
+        rows, cols = np.nonzero(marks)
+        if rows.size and len(discs := self.people.moving_discs()):
+            centres = self.static_map.cell_to_world(rows, cols)
+            gaps = np.hypot(centres[:, None, 0] - discs[None, :, 0],
+                            centres[:, None, 1] - discs[None, :, 1]) - discs[None, :, 4]
+            person = (gaps <= 0.3).any(axis=1)
+            marks[rows[person], cols[person]] = False
+        return marks
+
+    def avoid(self, marks: np.ndarray) -> int:
+        """Treat the ``marks`` cells ((height, width) bool on the static map) as walls
+        until the next goal: what the newest scan alone marks is forgotten once the chair
+        turns away, and a way blocked by it would be planned again as soon as it is out
+        of sight. Returns how many cells were new; if any, the plan is made again at the
+        next decision."""
+        marks = np.asarray(marks, dtype=bool)
+        if marks.shape != self.static_map.shape:
+            raise ValueError(f"marks must be a bool array of the static map's shape "
+                             f"{self.static_map.shape}, got {marks.shape}")
+        new = marks & (self.static_map.cost != LETHAL) & ~self.avoided
+        if not new.any():
+            return 0
+        self.avoided |= new
+        self.global_costmap = self._with_obstacles(new)
+        self._next_plan = -math.inf
+        self._blocked_since = None
+        self._phase = "planning round what blocks the way"
+        return int(new.sum())
 
     # ------------------------------------------------------------------ per frame
     def observe(self, frame: SensorFrame) -> None:
@@ -336,11 +383,20 @@ class Navigator(BehaviourBase):
 
     def _relocalise(self, frame: SensorFrame) -> Twist:
         """Lost: stand still and search round the estimate for where the scan fits the
-        map (:meth:`MapLocalizer.recover`), once a second; fail after
+        map (:meth:`MapLocalizer.recover`), once a second; with ``relocalise_turn`` set,
+        after each search that finds nothing, once the chair stands, turn that far on
+        the spot (left) where the
+        newest scan shows room for it, so the next search sees other walls (a corridor
+        that fits many places along it, a person hiding the walls). Fail after
         ``relocalise_patience`` s without a place."""
-        self._phase = "relocalising"
+        s = self.settings
         if self._lost_since is None:
             self._lost_since, self._next_search = frame.t, frame.t
+            self._turn_until = -math.inf
+        if frame.t < self._turn_until:
+            self._phase = "turning to re-localise"
+            return Twist(0.0, s.in_place_turn_rate)
+        self._phase = "relocalising"
         scan = frame.readings.get(self.localizer.scan_frame)
         if frame.t >= self._next_search and isinstance(scan, LaserScan):
             self._next_search = frame.t + 1.0
@@ -349,11 +405,33 @@ class Navigator(BehaviourBase):
                 self._next_plan = -math.inf  # plan again from where the chair really is
                 self._anchor = (frame.t, self.localizer.pose)
                 return Twist(0.0, 0.0)
-        if frame.t - self._lost_since > self.settings.relocalise_patience:
+            standing = abs(self.localizer.velocity[0]) < 0.05  # stop first, then turn
+            if (s.relocalise_turn is not None and standing
+                    and self._room_to_turn(frame, s.relocalise_turn)):
+                self._turn_until = frame.t + s.relocalise_turn / s.in_place_turn_rate
+                # search again once the turn is done and a scan has been taken standing
+                self._next_search = self._turn_until + 0.5
+        if frame.t - self._lost_since > s.relocalise_patience:
+            turning = ", turning on the spot" if s.relocalise_turn is not None else ""
             self.fail("lost: the scans no longer fit the map where the chair thinks it is, "
                       f"and no place within reach fits them either "
-                      f"({self.settings.relocalise_patience:.0f} s of searching)")
+                      f"({s.relocalise_patience:.0f} s of searching{turning})")
         return Twist(0.0, 0.0)
+
+    def _room_to_turn(self, frame: SensorFrame, angle: float) -> bool:
+        """Whether the footprint turned by up to ``angle`` (rad, left) stays off what the
+        newest lidar scan sees. The scan alone, laid round the chair: while lost, the
+        map's walls are not where the estimate would put them."""
+        s, pose = self.settings, self.localizer.pose
+        scan = frame.readings.get(LIDAR_FRAME)
+        if not isinstance(scan, LaserScan):
+            return False
+        around = Costmap.rolling_window(pose, s.local_size, s.resolution, default=FREE_SPACE)
+        around.add_scan(scan, compose(pose, self.params.lidar.mount), s.obstacle_range,
+                        s.raytrace_range)
+        return all(footprint_cost(around, self.footprint,
+                                  compose(pose, (0.0, 0.0, angle * k / 4))) < LETHAL
+                   for k in range(1, 5))
 
     def _regulated(self, result: DwaResult, pose: Pose2D) -> Twist:
         """DWA's command, slowed along its own arc (the same curvature, so on the way it
@@ -395,6 +473,7 @@ class Navigator(BehaviourBase):
     # ------------------------------------------------------------------ the parts
     def _clear_goal_state(self) -> None:
         self._lost_since: float | None = None
+        self._turn_until = -math.inf
         self._next_search = -math.inf
         self._started: float | None = None
         self._timeout = math.inf
@@ -481,11 +560,7 @@ class Navigator(BehaviourBase):
         self._next_plan = (now if math.isfinite(now) else -math.inf) + 1.0 / s.planner_frequency
         costmap = self.global_costmap
         if local is not None:
-            marks = np.zeros(self.static_map.shape, dtype=bool)
-            rows, cols = np.nonzero(self._seen)
-            g_rows, g_cols = self.static_map.world_to_cell(local.cell_to_world(rows, cols))
-            inside = self.static_map.contains(g_rows, g_cols)
-            marks[g_rows[inside], g_cols[inside]] = True
+            marks = self._seen_on_map(local)
             # where people will walk: the plan goes round it, not into their way
             marks |= predicted_sweep(self.people.moving_discs(), self.static_map,
                                      s.people_horizon)
@@ -516,6 +591,15 @@ class Navigator(BehaviourBase):
         if not math.isfinite(self._timeout):
             self._timeout = (self.settings.goal_timeout if self.settings.goal_timeout
                              else 60.0 + 3.0 * self.path.length / s.max_vel_x)
+
+    def _seen_on_map(self, local: Costmap) -> np.ndarray:
+        """The newest scan's marks in ``local`` as cells of the static map (walls too)."""
+        marks = np.zeros(self.static_map.shape, dtype=bool)
+        rows, cols = np.nonzero(self._seen)
+        g_rows, g_cols = self.static_map.world_to_cell(local.cell_to_world(rows, cols))
+        inside = self.static_map.contains(g_rows, g_cols)
+        marks[g_rows[inside], g_cols[inside]] = True
+        return marks
 
     def _people_moving(self) -> bool:
         """Whether a tracked person is walking: then the plan is renewed twice as often."""

@@ -25,6 +25,28 @@ from abcwc.perception.speech.commands import CommandSet, SpokenCommand
 from abcwc.types import SensorFrame, Twist
 
 
+def understood(commands: CommandSet, command: SpokenCommand | str, navigator: bool,
+               follower: bool, asker: str = "VoiceControl") -> SpokenCommand:
+    """``command`` (a recogniser's ``SpokenCommand``, or typed text parsed by the
+    ``commands`` grammar) checked against what the chair can obey: ``navigator`` and
+    ``follower`` say whether it has them (``asker`` names the class in the message).
+    Raises ``ValueError`` for text that is not a command (the message lists them), or
+    for a command whose behaviour is missing."""
+    if isinstance(command, str):
+        command = commands.parse(command)
+    if not isinstance(command, SpokenCommand):
+        raise ValueError(f"a command is text or a SpokenCommand, got "
+                         f"{type(command).__name__}")
+    if command.phrase not in commands:
+        raise ValueError(f'"{command.phrase}" is not one of this chair\'s commands')
+    if command.place is not None and not navigator:
+        raise ValueError(f'"{command.phrase}" needs a navigator: '
+                         f"{asker}(..., navigator=...)")
+    if command.follow and not follower:
+        raise ValueError(f'"follow me" needs a follower: {asker}(..., follower=...)')
+    return command
+
+
 class VoiceControl(BehaviourBase):
     """Obey ``commands`` as they are heard (module notes). ``navigator`` and
     ``follower`` are optional; a command that needs one that is missing is refused."""
@@ -64,16 +86,8 @@ class VoiceControl(BehaviourBase):
         the same grammar) from the next frame on. Raises ``ValueError`` for text that is
         not a command (the message lists them) or for a command whose behaviour this
         chair lacks."""
-        if isinstance(command, str):
-            command = self.commands.parse(command)
-        if command.phrase not in self.commands:
-            raise ValueError(f'"{command.phrase}" is not one of this chair\'s commands')
-        if command.place is not None and self.navigator is None:
-            raise ValueError(f'"{command.phrase}" needs a navigator: '
-                             "VoiceControl(commands, navigator=...)")
-        if command.follow and self.follower is None:
-            raise ValueError('"follow me" needs a follower: VoiceControl(commands, '
-                             "follower=...)")
+        command = understood(self.commands, command, navigator=self.navigator is not None,
+                             follower=self.follower is not None, asker="VoiceControl")
         self._pending = command
         return command
 

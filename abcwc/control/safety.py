@@ -199,6 +199,13 @@ class ClearanceCheck:
         return nearest, seen_by
 
 
+def joystick_overrides(frame: SensorFrame) -> bool:
+    """Whether the person in the seat is driving: the frame's ``JOYSTICK_OVERRIDE`` flag,
+    set by the interface board (the simulator's, or the firmware's) while the joystick
+    is deflected out of its dead band. Rule 1 and the mission layer ask this one question."""
+    return bool(frame.flags & StatusFlags.JOYSTICK_OVERRIDE)
+
+
 def _range_of(reading: object) -> float:
     """A range reading as a float: NaN for none (or a reading that is not a range)."""
     return float(reading) if isinstance(reading, (int, float)) else math.nan
@@ -256,7 +263,7 @@ class SafetyFilter:
         """Rules 1 and 2: (kind, detail) of a stop the joystick or a stale command
         calls for, or None."""
         lim = self.limits
-        if frame.flags & StatusFlags.JOYSTICK_OVERRIDE:
+        if joystick_overrides(frame):
             self._overridden = True
             return "joystick override", ""
         if self._overridden:

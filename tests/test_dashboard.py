@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from abcwc.behaviours.mission import Mission
 from abcwc.sim import SimBase
 from abcwc.sim.world import load_world
 from abcwc.ui.access import DwellSelector, SwitchScanner
 from abcwc.ui.dashboard import Dashboard
 from abcwc.ui.map_view import CSS_DPI, MapView
 from abcwc.ui.teleop import TeleopPanel
-from tests.mission_stand_in import StandInMission
 
 LAB = load_world("lab").places
 
@@ -29,7 +29,7 @@ LAB = load_world("lab").places
 def _dashboard(**options: object) -> Dashboard:
     chair = SimBase("lab", seed=1, lidar=True, people=False)
     options.setdefault("time_scale", math.inf)
-    return Dashboard(chair, StandInMission.for_world(chair.world), **options)
+    return Dashboard(chair, Mission.for_world(chair.world, chair=chair), **options)
 
 
 def _distance(pose: object, place: str) -> float:
@@ -152,7 +152,7 @@ def test_an_errand_that_fails_at_once_says_why():
 
     async def walled():
         chair = SimBase(box, seed=1, lidar=True, people=False)
-        d = Dashboard(chair, StandInMission.for_world(box), time_scale=math.inf)
+        d = Dashboard(chair, Mission.for_world(box, chair=chair), time_scale=math.inf)
         d.choose("shelf")  # on the east wall
         await _drive_ends(d)
         return d
@@ -273,7 +273,8 @@ def test_it_drives_the_firmware_in_the_loop_body_the_same_way():
     chair = FirmwareInLoopBase("lab", seed=1, lidar=True, people=False, build=False)
     try:
         async def errand():
-            d = Dashboard(chair, StandInMission.for_world(chair.world), time_scale=math.inf)
+            d = Dashboard(chair, Mission.for_world(chair.world, chair=chair),
+                          time_scale=math.inf)
             d.choose("centre")
             await _drive_ends(d)
             return d

@@ -34,14 +34,13 @@ def _notebook(path: Path, on_busy: str) -> None:
     writes its kernel's process id beside itself."""
     notebook = nbformat.v4.new_notebook()
     notebook.cells = [nbformat.v4.new_code_cell(
-        "import os, sys\n"
-        f"sys.path.insert(0, {str(ROOT)!r})\n"
+        "import os\n"
         "open('kernel.pid', 'w').write(str(os.getpid()))\n"
         "from abcwc.sim import SimBase\n"
         "from abcwc.ui.dashboard import Dashboard\n"
-        "from tests.mission_stand_in import StandInMission\n"
+        "from abcwc.behaviours.mission import Mission\n"
         "chair = SimBase('lab', seed=1, lidar=True, people=False)\n"
-        "dashboard = Dashboard(chair, StandInMission.for_world(chair.world),\n"
+        "dashboard = Dashboard(chair, Mission.for_world(chair.world, chair=chair),\n"
         f"                      dwell_seconds=0.8, scan_seconds=1.0, on_busy={on_busy!r})\n"
         "dashboard")]
     notebook.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",

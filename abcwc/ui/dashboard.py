@@ -66,13 +66,15 @@ import time
 import uuid
 from collections.abc import Callable
 
-from abcwc.perception.speech.commands import CommandSet, SpokenCommand
+from abcwc.behaviours.mission import Mission, MissionState
+from abcwc.perception.speech.commands import SpokenCommand
 from abcwc.types import Pose2D
 from abcwc.ui.access import DwellSelector, FrontEnd, SwitchScanner
 from abcwc.ui.map_view import MapView
 
-DRIVING_STATES = frozenset({"localising", "navigating", "following", "waiting"})
-"""The mission states (MissionState values) in which the mission moves the chair."""
+DRIVING_STATES = frozenset({MissionState.LOCALISING, MissionState.NAVIGATING,
+                            MissionState.FOLLOWING, MissionState.WAITING})
+"""The mission states in which the mission moves the chair."""
 ON_BUSY = ("queue", "refuse")
 VOILA_OPTIONS = ("--MappingKernelManager.cull_interval=5",
                  "--MappingKernelManager.cull_idle_timeout=10")
@@ -81,11 +83,6 @@ STOP = "stop"
 STILL_WINDOW = 0.3  # s: the chair is still when its estimate moved less than
 STILL_DISTANCE = 0.005  # m and
 STILL_TURN = 0.01  # rad over the last STILL_WINDOW
-
-
-def _state_text(state: object) -> str:
-    """A MissionState's value (``"navigating"``), or the text of any other state."""
-    return str(getattr(state, "value", state))
 
 
 def _positive(name: str, value: object, unit: str) -> float:
@@ -109,7 +106,7 @@ class Dashboard:
     ``on_busy`` says what a second command during an errand does ("queue" or "refuse").
     """
 
-    def __init__(self, chair: object, mission: object, *, width: int = 760,
+    def __init__(self, chair: object, mission: Mission, *, width: int = 760,
                  time_scale: float = 1.0, yield_periods: int = 5, redraw_hz: float = 10.0,
                  dwell: bool = False, dwell_seconds: float = 1.0, scan_seconds: float = 1.5,
                  scan_rounds: int = 3, switch_key: str = " ", on_busy: str = "queue"):
@@ -132,7 +129,6 @@ class Dashboard:
         if STOP in self.destinations:
             raise ValueError(f"a destination may not be called {STOP!r}: it is the stop "
                              f"button's name")
-        self.commands = getattr(mission, "commands", None) or CommandSet(mission.destinations)
         self.dwell = DwellSelector(dwell_seconds)
         self.scanner = SwitchScanner([*self.destinations, STOP], scan_seconds, scan_rounds)
         self.frame = chair.read()
@@ -229,7 +225,7 @@ class Dashboard:
     @property
     def busy(self) -> bool:
         """Whether the mission is driving (its state one of :data:`DRIVING_STATES`)."""
-        return _state_text(self.mission.state) in DRIVING_STATES
+        return self.mission.state in DRIVING_STATES
 
     @property
     def driving(self) -> bool:
@@ -258,7 +254,8 @@ class Dashboard:
         shown with the list of those it does."""
         _event_loop()  # before anything changes
         try:
-            spoken = text if isinstance(text, SpokenCommand) else self.commands.parse(text)
+            spoken = (text if isinstance(text, SpokenCommand)
+                      else self.mission.commands.parse(text))
         except ValueError as error:
             self._say(html.escape(str(error)), "error")
             return
@@ -302,7 +299,7 @@ class Dashboard:
         except ValueError as error:
             self._say(f"\u201c{label}\u201d: {html.escape(str(error))}", "error")
             return
-        if _state_text(self.mission.state) == "failed":  # a goal in a wall, no path, ...
+        if self.mission.state is MissionState.FAILED:  # a goal in a wall, no path, ...
             self._say(f"\u201c{label}\u201d failed at once: "
                       f"{html.escape(str(self.mission.reason))}", "error")
         else:
@@ -310,8 +307,8 @@ class Dashboard:
         self._start_drive()
 
     def _doing(self) -> str:
-        goal = getattr(self.mission, "goal", None)
-        state = _state_text(self.mission.state)
+        goal = self.mission.goal
+        state = self.mission.state.value
         if isinstance(goal, str):
             return f"{state} to the {goal.replace('_', ' ')}"
         if isinstance(goal, Pose2D):
@@ -346,7 +343,7 @@ class Dashboard:
                 before = self._truth()
                 for _ in range(self.yield_periods):
                     self.chair.send(self.mission(self.frame),
-                                    getattr(self.mission, "decided_at", None))
+                                    self.mission.decided_at)
                     self._note_safety()
                     self.frame = self.chair.step()
                 self._note_motion(before)
@@ -402,12 +399,12 @@ class Dashboard:
     def redraw(self) -> None:
         """Draw the map and write the status lines as they are now."""
         nav = self.navigator
-        going = getattr(self.mission, "goal", None) is not None
+        going = self.mission.goal is not None
         plan = nav.path.points if going and nav.path is not None else None
         self.map.draw(nav.localizer.pose, plan, nav.people.moving_discs(),
                       nav.goal if going else None)
-        state = _state_text(self.mission.state)
-        reason = html.escape(str(getattr(self.mission, "reason", "") or ""))
+        state = self.mission.state.value
+        reason = html.escape(self.mission.reason)
         self.state_line.value = (f"<span style='font-size:20px'><b>{state}</b>"
                                  f"{' &mdash; ' + reason if reason else ''}</span>")
         if self.intervention is None:

@@ -20,7 +20,7 @@ from abcwc.sim import SimBase
 from abcwc.sim.world import load_world
 from abcwc.ui.access import DwellSelector, SwitchScanner
 from abcwc.ui.dashboard import Dashboard
-from abcwc.ui.map_view import CSS_DPI, MapView
+from abcwc.ui.map_view import CSS_DPI, MARGINS, MapView
 from abcwc.ui.teleop import TeleopPanel
 
 LAB = load_world("lab").places
@@ -72,6 +72,57 @@ def test_a_destination_button_drives_the_chair_there():
     assert d.mission.state == "arrived" and "arrived" in d.state_line.value
     assert _rests(d) < 0.01
     assert "moving at 0.0" in d.truth_line.value
+
+
+def test_a_click_on_the_map_drives_the_chair_to_that_point():
+    """The browser hook's message for a click (CSS px on the image as shown, here shown
+    at twice its size) reaches the mission as go_to((x, y)) in metres."""
+    target = (7.0, 6.0)  # free floor in the lab, away from its places
+
+    async def clicked():
+        d = _dashboard()
+        px, py = d.map.to_pixel(*target)
+        d._on_front_end(None, {"event": "map click", "x": 2 * px, "y": 2 * py,
+                               "width": 2 * d.map.width, "height": 2 * d.map.height}, None)
+        assert d.driving and "started" in d.notice_line.value
+        await _drive_ends(d)
+        return d
+
+    d = asyncio.run(clicked())
+    assert d.mission.state == "arrived" and "(7.00, 6.00) m" in d.mission.reason
+    assert math.hypot(d.chair.pose.x - target[0], d.chair.pose.y - target[1]) < 0.35
+    assert _rests(d) < 0.01
+
+
+def test_a_click_off_the_map_is_refused_in_the_view():
+    async def clicked():
+        d = _dashboard()
+        d.click(5.0, 5.0)  # in the left margin, over the y axis's labels
+        return d
+
+    d = asyncio.run(clicked())
+    assert "off the map" in d.notice_line.value and d.mission.transitions == []
+
+
+def test_a_clicked_pixel_is_turned_into_metres_through_the_views_transform():
+    """The corners of the plotted map sit MARGINS CSS px in from the image's edges (the
+    axes box the view builds), at any pixel ratio; a click there is the map's corner."""
+    view = _dashboard().map
+    left, right, top, bottom = MARGINS
+    x0, x1, y0, y1 = view.extent
+    for ratio in (1.0, 2.0):
+        view.set_pixel_ratio(ratio)
+        assert view.to_map(left, view.height - bottom) == pytest.approx((x0, y0), abs=1e-6)
+        assert view.to_map(view.width - right, top) == pytest.approx((x1, y1), abs=1e-6)
+        # metres per CSS px: the map's size over the axes box's
+        across = (x1 - x0) / (view.width - left - right)
+        up = (y1 - y0) / (view.height - top - bottom)
+        x, y = view.to_map(left + 100, view.height - bottom - 50)
+        assert (x, y) == pytest.approx((x0 + 100 * across, y0 + 50 * up), abs=1e-6)
+    with pytest.raises(ValueError, match="off the map"):
+        view.to_map(left - 5, top + 20)
+    with pytest.raises(ValueError, match="finite"):
+        view.to_map(float("nan"), 20.0)
 
 
 def test_a_second_command_while_driving_is_queued_then_run():

@@ -2,7 +2,8 @@
 Playwright), in JupyterLab and as a standalone Voila page: a destination button drives
 the chair there (checked against the simulator's truth), the map redraws while it
 drives (screenshots differ), a second command is queued or refused in the view, stop
-stops it (truth speed ~0), dwell and switch scanning pick destinations, the map is drawn
+stops it (truth speed ~0), dwell and switch scanning pick destinations, a click on the
+map (JupyterLab) sends the chair to the point clicked, the map is drawn
 at its shown size times the device pixel ratio, and closing the Voila page releases its
 kernel process."""
 
@@ -23,7 +24,6 @@ import pytest
 from abcwc.ui.dashboard import VOILA_OPTIONS
 from tests.test_panel_browser import CHROMIUM, _free_port, _require_browser
 
-ROOT = Path(__file__).resolve().parents[1]
 CENTRE = (5.0, 4.0)  # the lab world's places the errands go to
 BENCH = (6.8, 3.2)
 TRUTH = re.compile(r"chair at \(([-\d.]+), ([-\d.]+)\) m, moving at ([-\d.]+) m/s")
@@ -220,6 +220,32 @@ def _exercise(page, second_command: str) -> dict:
     return measured
 
 
+def _click_the_map(page, target: tuple[float, float] = (7.0, 6.0)) -> float:
+    """Click the map at ``target`` (m; free floor in the lab) and wait until the chair
+    has driven there (the simulator's truth); the seconds it took. Where the point is on
+    the image comes from the view's layout: the lab's costmap extent plotted inside the
+    image less MARGINS (CSS px)."""
+    from abcwc.behaviours.navigator import Navigator
+    from abcwc.sim.world import load_world
+    from abcwc.ui.map_view import MARGINS
+
+    costmap = Navigator.for_world(load_world("lab")).global_costmap
+    x0, y0 = costmap.origin.x, costmap.origin.y
+    x1, y1 = x0 + costmap.width * costmap.resolution, y0 + costmap.height * costmap.resolution
+    box = page.locator("img.abcwc-dashboard-map").bounding_box()
+    left, right, top, bottom = MARGINS
+    px = left + (target[0] - x0) / (x1 - x0) * (box["width"] - left - right)
+    py = top + (y1 - target[1]) / (y1 - y0) * (box["height"] - top - bottom)
+    started = time.monotonic()
+    page.mouse.click(box["x"] + px, box["y"] + py)
+    _wait_for(page, "abcwc-dashboard-state", r"navigating .*map clicked", 10)
+    _wait_for(page, "abcwc-dashboard-state", r"arrived", 60)
+    x, y, _ = _wait_still(page)
+    # the goal tolerance (0.25 m) plus a click's rounding to a CSS px (~0.02 m)
+    assert ((x - target[0]) ** 2 + (y - target[1]) ** 2) ** 0.5 < 0.35, (x, y)
+    return time.monotonic() - started
+
+
 def _launch(playwright):
     return playwright.chromium.launch(executable_path=CHROMIUM,
                                       args=["--no-sandbox", "--disable-gpu"])
@@ -237,6 +263,7 @@ def test_the_dashboard_in_jupyterlab(lab):
         page.locator(".jp-Cell").first.click()
         page.keyboard.press("Shift+Enter")
         measured = _exercise(page, r"queued")
+        measured["click_errand_s"] = _click_the_map(page)
         browser.close()
     print(measured)
 

@@ -18,9 +18,9 @@ The thesis's riders choose by gaze, by head gesture or by a sip-and-puff switch 
 The logic here is plain Python with an explicit clock (s), so it is tested without a
 browser. :class:`FrontEnd` is the small browser hook (an anywidget, which runs in
 JupyterLab and in Voila alike): ipywidgets has no hover event and no document-wide key
-press, so it reports the pointer entering and leaving the option buttons (marked with
-CSS classes), the switch key while scanning is on, ``window.devicePixelRatio``, and
-that the page is being closed.
+press, and an image widget no click, so it reports the pointer entering and leaving the
+option buttons (marked with CSS classes), the switch key while scanning is on, a click
+on the map, ``window.devicePixelRatio``, and that the page is being closed.
 """
 
 from __future__ import annotations
@@ -185,17 +185,27 @@ function render({ model, el }) {
     event.preventDefault();
     event.stopPropagation();
   };
+  // a click on the map: where, in CSS px from the image's top left, and its shown size
+  const click = (event) => {
+    const map = event.target.closest ? event.target.closest("." + token + "-map") : null;
+    if (map === null) return;
+    const box = map.getBoundingClientRect();
+    model.send({ event: "map click", x: event.clientX - box.left, y: event.clientY - box.top,
+                 width: box.width, height: box.height });
+  };
   // the page is going (closed, reloaded, left): the kernel may still drive a chair
   const leaving = () => model.send({ event: "page closed" });
   document.addEventListener("pointerover", over, true);
   document.addEventListener("keydown", keyDown, true);
   document.addEventListener("keyup", keyUp, true);
+  document.addEventListener("click", click, true);
   window.addEventListener("beforeunload", leaving);
   return () => {
     window.removeEventListener("beforeunload", leaving);
     document.removeEventListener("pointerover", over, true);
     document.removeEventListener("keydown", keyDown, true);
     document.removeEventListener("keyup", keyUp, true);
+    document.removeEventListener("click", click, true);
     ratioQuery.removeEventListener("change", reportRatio);
   };
 }
@@ -205,8 +215,11 @@ export default { render };
 
 class FrontEnd(anywidget.AnyWidget):
     """The invisible browser hook (module notes). Options are elements with the CSS
-    classes ``token`` and ``token-<option>``; messages arrive through ``on_msg`` as
-    ``{"event": "enter" | "leave", "option": name}``, ``{"event": "switch"}`` and, when
+    classes ``token`` and ``token-<option>``, the map the element with the class
+    ``token-map``; messages arrive through ``on_msg`` as
+    ``{"event": "enter" | "leave", "option": name}``, ``{"event": "switch"}``,
+    ``{"event": "map click", "x": px, "y": px, "width": px, "height": px}`` (where the
+    map was clicked from its top left and the size it is shown at, CSS px) and, when
     the page is closed or left, ``{"event": "page closed"}``."""
 
     _esm = _ESM

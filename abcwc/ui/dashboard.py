@@ -4,7 +4,8 @@
 
 * the map, with the costmap (faint), the places, the plan, the tracked people (and where
   each will be in 1 s) and the chair drawn to scale at its estimated pose, over the goal
-  ring rather than under it;
+  ring rather than under it; a click on it sends the chair to the point clicked (the
+  mission's ``go_to((x, y))``, the pixel turned into metres by the map's own transform);
 * a button per destination, a command box (typed commands in the mission's grammar:
   "go to the <place>", "follow me", "stop") and a big stop button;
 * the mission's state and the reason for it, what became of the last command, the
@@ -192,6 +193,7 @@ class Dashboard:
                            (self.truth_line, "truth"), (self.access_line, "access")):
             line.add_class(f"abcwc-dashboard-{name}")
         self.map.image.add_class("abcwc-dashboard-map")
+        self.map.image.add_class(f"{self.token}-map")  # the hook reports clicks on it
         side = widgets.VBox([self.stop_button, *[self.buttons[n] for n in self.destinations]],
                             layout=widgets.Layout(flex="0 0 auto"))
         self.widget = widgets.VBox([
@@ -266,6 +268,19 @@ class Dashboard:
             self._start_drive()
             return
         self._request(spoken.phrase, lambda: self.mission.command(text))
+
+    def click(self, px: float, py: float) -> None:
+        """A click on the map ``(px, py)`` CSS px from its top left: go to that point
+        (:meth:`MapView.to_map <abcwc.ui.map_view.MapView.to_map>`); a click off the map
+        is shown and does nothing."""
+        _event_loop()  # before anything changes
+        try:
+            x, y = self.map.to_map(px, py)
+        except ValueError as error:
+            self._say(html.escape(str(error)), "error")
+            return
+        self._request(f"go to ({x:.1f}, {y:.1f}) m",
+                      lambda: self.mission.go_to((x, y), reason="map clicked"))
 
     def stop(self, reason: str = "stop pressed") -> None:
         """Stop at once (the chair brakes through the safety filter) and empty the queue."""
@@ -452,6 +467,11 @@ class Dashboard:
         elif event == "leave":
             self.dwell.leave(option, now)
             self._light()
+        elif event == "map click":
+            shown = (content.get("width"), content.get("height"))
+            if all(isinstance(v, (int, float)) and v > 0 for v in shown):
+                self.click(content["x"] * self.map.width / shown[0],
+                           content["y"] * self.map.height / shown[1])
         elif event == "page closed":
             if self.busy or self.driving:
                 self.stop("the page was closed")

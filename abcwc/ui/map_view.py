@@ -181,3 +181,17 @@ class MapView:
         """Where the map point ``(x, y)`` (m) is on the image, in CSS px from its top left."""
         px, py = self.ax.transData.transform((x, y)) / self.pixel_ratio
         return float(px), float(self.height - py)
+
+    def to_map(self, px: float, py: float) -> tuple[float, float]:
+        """The map point (m) at ``(px, py)`` CSS px from the image's top left (a click):
+        :meth:`to_pixel` undone through the same axes transform. ValueError for a point
+        off the map (in the margins round it, or not finite)."""
+        if not (math.isfinite(px) and math.isfinite(py)):
+            raise ValueError(f"a point on the image is finite CSS px, got ({px!r}, {py!r})")
+        display = (px * self.pixel_ratio, (self.height - py) * self.pixel_ratio)
+        x, y = self.ax.transData.inverted().transform(display)
+        x0, x1, y0, y1 = self.extent
+        if not (x0 <= x <= x1 and y0 <= y <= y1):
+            raise ValueError(f"({px:.0f}, {py:.0f}) px is off the map: the map spans "
+                             f"x {x0:.1f}..{x1:.1f} m and y {y0:.1f}..{y1:.1f} m")
+        return float(x), float(y)

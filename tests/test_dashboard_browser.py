@@ -22,7 +22,7 @@ import nbformat
 import pytest
 
 from abcwc.ui.dashboard import VOILA_OPTIONS
-from tests.test_panel_browser import CHROMIUM, _free_port, _require_browser
+from tests.browser_helpers import CHROMIUM, free_port, require_browser
 
 CENTRE = (5.0, 4.0)  # the lab world's places the errands go to
 BENCH = (6.8, 3.2)
@@ -76,9 +76,9 @@ def _stop(server: subprocess.Popen) -> None:
 @pytest.fixture
 def lab(tmp_path) -> Iterator[str]:
     """JupyterLab serving the dashboard notebook (second commands queued)."""
-    _require_browser()
+    require_browser()
     _notebook(tmp_path / "dashboard.ipynb", on_busy="queue")
-    port = _free_port()
+    port = free_port()
     url = f"http://127.0.0.1:{port}/"
     server = _serve(
         [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}",
@@ -96,9 +96,9 @@ def lab(tmp_path) -> Iterator[str]:
 def voila(tmp_path) -> Iterator[tuple[str, Path]]:
     """Voila serving the dashboard notebook as a standalone page (second commands
     refused), with the dashboard's options that release a closed page's kernel."""
-    _require_browser()
+    require_browser()
     _notebook(tmp_path / "dashboard.ipynb", on_busy="refuse")
-    port = _free_port()
+    port = free_port()
     url = f"http://127.0.0.1:{port}/"
     server = _serve(
         [sys.executable, "-m", "voila", str(tmp_path / "dashboard.ipynb"), "--no-browser",

@@ -1,5 +1,6 @@
 """The dashboard as a rider uses it, in a real browser (Debian's ``chromium`` driven by
-Playwright), in JupyterLab and as a standalone Voila page: a destination button drives
+Playwright), in JupyterLab and as the standalone Voila page exactly as ``abcwc dashboard``
+serves it (the package's notebook, the same Voila command): a destination button drives
 the chair there (checked against the simulator's truth), the map redraws while it
 drives (screenshots differ), a second command is queued or refused in the view, stop
 stops it (truth speed ~0), dwell and switch scanning pick destinations, a click on the
@@ -21,7 +22,7 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from abcwc.ui.dashboard import VOILA_OPTIONS
+from abcwc.ui.dashboard import VOILA_IP, WORLD_VARIABLE, voila_command
 from tests.browser_helpers import CHROMIUM, free_port, require_browser
 
 CENTRE = (5.0, 4.0)  # the lab world's places the errands go to
@@ -30,12 +31,9 @@ TRUTH = re.compile(r"chair at \(([-\d.]+), ([-\d.]+)\) m, moving at ([-\d.]+) m/
 
 
 def _notebook(path: Path, on_busy: str) -> None:
-    """A notebook whose one cell shows a dashboard on the lab world's simulator and
-    writes its kernel's process id beside itself."""
+    """A notebook whose one cell shows a dashboard on the lab world's simulator."""
     notebook = nbformat.v4.new_notebook()
     notebook.cells = [nbformat.v4.new_code_cell(
-        "import os\n"
-        "open('kernel.pid', 'w').write(str(os.getpid()))\n"
         "from abcwc.sim import SimBase\n"
         "from abcwc.ui.dashboard import Dashboard\n"
         "from abcwc.behaviours.mission import Mission\n"
@@ -48,11 +46,12 @@ def _notebook(path: Path, on_busy: str) -> None:
     nbformat.write(notebook, path)
 
 
-def _serve(command: list[str], port: int, log: Path) -> subprocess.Popen:
+def _serve(command: list[str], port: int, log: Path,
+           env: dict[str, str] | None = None) -> subprocess.Popen:
     """Start a server, its output to ``log``, and wait until it listens on ``port`` (a
     GET could start a kernel)."""
     with open(log, "wb") as out:
-        server = subprocess.Popen(command, stdout=out, stderr=subprocess.STDOUT)
+        server = subprocess.Popen(command, stdout=out, stderr=subprocess.STDOUT, env=env)
     deadline = time.monotonic() + 60
     while True:
         try:
@@ -75,9 +74,9 @@ def _stop(server: subprocess.Popen) -> None:
 
 @pytest.fixture
 def lab(tmp_path) -> Iterator[str]:
-    """JupyterLab serving the dashboard notebook (second commands queued)."""
+    """JupyterLab serving a dashboard notebook (second commands refused)."""
     require_browser()
-    _notebook(tmp_path / "dashboard.ipynb", on_busy="queue")
+    _notebook(tmp_path / "dashboard.ipynb", on_busy="refuse")
     port = free_port()
     url = f"http://127.0.0.1:{port}/"
     server = _serve(
@@ -93,19 +92,18 @@ def lab(tmp_path) -> Iterator[str]:
 
 
 @pytest.fixture
-def voila(tmp_path) -> Iterator[tuple[str, Path]]:
-    """Voila serving the dashboard notebook as a standalone page (second commands
-    refused), with the dashboard's options that release a closed page's kernel."""
+def voila(tmp_path) -> Iterator[tuple[str, subprocess.Popen, Path]]:
+    """The standalone page as ``abcwc dashboard --world lab --no-browser`` serves it:
+    the package's notebook, Voila run by the same command (second commands queued, the
+    dashboard's default; a closed page's kernel culled)."""
     require_browser()
-    _notebook(tmp_path / "dashboard.ipynb", on_busy="refuse")
     port = free_port()
-    url = f"http://127.0.0.1:{port}/"
-    server = _serve(
-        [sys.executable, "-m", "voila", str(tmp_path / "dashboard.ipynb"), "--no-browser",
-         f"--port={port}", "--Voila.ip=127.0.0.1", *VOILA_OPTIONS], port,
-        tmp_path / "server.log")
+    url = f"http://{VOILA_IP}:{port}/"
+    log = tmp_path / "server.log"
+    server = _serve(voila_command(port, open_browser=False), port, log,
+                    env={**os.environ, WORLD_VARIABLE: "lab"})
     try:
-        yield url, tmp_path / "kernel.pid"
+        yield url, server, log
     finally:
         _stop(server)
 
@@ -262,7 +260,7 @@ def test_the_dashboard_in_jupyterlab(lab):
         page.get_by_text(re.compile(r"\| Idle")).first.wait_for(timeout=60_000)
         page.locator(".jp-Cell").first.click()
         page.keyboard.press("Shift+Enter")
-        measured = _exercise(page, r"queued")
+        measured = _exercise(page, r"refused")
         measured["click_errand_s"] = _click_the_map(page)
         browser.close()
     print(measured)
@@ -271,14 +269,14 @@ def test_the_dashboard_in_jupyterlab(lab):
 def test_the_dashboard_under_voila_and_its_kernel_released(voila):
     from playwright.sync_api import sync_playwright
 
-    url, pid_file = voila
+    url, server, log = voila
     with sync_playwright() as playwright:
         browser = _launch(playwright)
         page = browser.new_page(viewport={"width": 1200, "height": 1000},
                                 device_scale_factor=2)
         page.goto(url, timeout=120_000)
-        measured = _exercise(page, r"refused")
-        pid = int(pid_file.read_text())
+        measured = _exercise(page, r"queued")
+        (pid,) = _kernels(server.pid)  # the page's kernel, and no other
         assert _alive(pid)
         closed = time.monotonic()
         page.goto("about:blank")  # leaving the page, as closing its tab does
@@ -289,8 +287,24 @@ def test_the_dashboard_under_voila_and_its_kernel_released(voila):
         measured["kernel_gone_s"] = time.monotonic() - closed
         browser.close()
     print(measured)
-    log = (pid_file.parent / "server.log").read_text()
-    assert not _alive(pid), f"the kernel process outlived the page by 60 s:\n{log[-3000:]}"
+    text = log.read_text()
+    assert "idle durations > 10 seconds at 5 second intervals" in text  # the culling
+    assert not _alive(pid), f"the kernel process outlived the page by 60 s:\n{text[-3000:]}"
+
+
+def _kernels(server: int) -> list[int]:
+    """The process ids of the kernels process ``server`` started (its ipykernel children)."""
+    kernels = []
+    for status in Path("/proc").glob("[0-9]*/status"):
+        try:
+            fields = dict(line.split(":\t", 1) for line in status.read_text().splitlines()
+                          if ":\t" in line)
+            command = (status.parent / "cmdline").read_bytes()
+        except (FileNotFoundError, ProcessLookupError):
+            continue
+        if int(fields["PPid"]) == server and b"ipykernel" in command:
+            kernels.append(int(fields["Pid"]))
+    return kernels
 
 
 def _alive(pid: int) -> bool:

@@ -43,8 +43,11 @@ trade: the longest wait is ``scan_seconds`` x the number of options (half that o
 average), so a fast scan saves time but asks for a quick, exact press, and a rider who
 is slow to press picks the neighbour.
 
-**Standalone (Voila).** Serve a notebook whose last line is a dashboard with
-:data:`VOILA_OPTIONS`::
+**Standalone (Voila).** ``abcwc dashboard [--world W]`` serves this package's
+:data:`NOTEBOOK` (a dashboard on the simulated chair in the world named by the
+environment variable :data:`WORLD_VARIABLE`) as a page of its own: the command it runs
+is :func:`voila_command`, with :data:`VOILA_OPTIONS`; any other notebook whose last line
+is a dashboard is served the same way::
 
     voila dashboard.ipynb --MappingKernelManager.cull_interval=5 \\
         --MappingKernelManager.cull_idle_timeout=10
@@ -63,9 +66,11 @@ from __future__ import annotations
 import asyncio
 import html
 import math
+import sys
 import time
 import uuid
 from collections.abc import Callable
+from pathlib import Path
 
 from abcwc.behaviours.mission import Mission, MissionState
 from abcwc.perception.speech.commands import SpokenCommand
@@ -80,6 +85,14 @@ ON_BUSY = ("queue", "refuse")
 VOILA_OPTIONS = ("--MappingKernelManager.cull_interval=5",
                  "--MappingKernelManager.cull_idle_timeout=10")
 """Voila's options for a dashboard page: release a kernel 10-15 s after its page went."""
+VOILA_IP = "127.0.0.1"
+"""Where Voila listens: this machine only (a page that drives a chair is not offered to
+the network)."""
+NOTEBOOK = Path(__file__).with_name("dashboard.ipynb")
+"""The standalone page: a dashboard on a simulated chair (``abcwc dashboard``)."""
+WORLD_VARIABLE = "ABCWC_DASHBOARD_WORLD"
+"""The environment variable that names :data:`NOTEBOOK`'s world (a name or a .json
+file; default the lab)."""
 STOP = "stop"
 STILL_WINDOW = 0.3  # s: the chair is still when its estimate moved less than
 STILL_DISTANCE = 0.005  # m and
@@ -531,6 +544,18 @@ class Dashboard:
     def _key_name(self) -> str:
         key = self.front_end.switch_key
         return "space" if key == " " else key
+
+
+def voila_command(port: int = 8866, open_browser: bool = True,
+                  notebook: Path = NOTEBOOK) -> list[str]:
+    """The command that serves ``notebook`` as a standalone page with Voila on
+    ``port``, on :data:`VOILA_IP`, with :data:`VOILA_OPTIONS` (a closed page's kernel is
+    released), opening the page in a browser if ``open_browser``."""
+    if isinstance(port, bool) or not isinstance(port, int) or not 1 <= port <= 65535:
+        raise ValueError(f"the port must be a whole number 1..65535, got {port!r}")
+    return [sys.executable, "-m", "voila", str(notebook), f"--port={port}",
+            f"--Voila.ip={VOILA_IP}", *VOILA_OPTIONS,
+            *([] if open_browser else ["--no-browser"])]
 
 
 def _event_loop() -> asyncio.AbstractEventLoop:

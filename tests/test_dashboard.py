@@ -125,6 +125,41 @@ def test_a_clicked_pixel_is_turned_into_metres_through_the_views_transform():
         view.to_map(float("nan"), 20.0)
 
 
+def test_widget_messages_on_another_threads_loop_act_on_the_dashboards_own():
+    """JupyterLab may handle widget messages on a kernel subshell (another thread with
+    its own event loop): a button pressed there must change the mission on the
+    dashboard's thread, between the drive's steps, never in the middle of one."""
+    import threading
+
+    acted_on = []
+    home = threading.get_ident()
+
+    def on_a_subshell(press) -> None:
+        async def handle() -> None:  # with a running loop of this thread's own
+            press()
+
+        asyncio.run(handle())
+
+    async def errand():
+        d = _dashboard(time_scale=1.0)
+        for name in ("go_to", "stop"):
+            method = getattr(d.mission, name)
+            setattr(d.mission, name, lambda *a, _m=method, _n=name, **k: (
+                acted_on.append((_n, threading.get_ident())), _m(*a, **k))[1])
+        loop = asyncio.get_running_loop()
+        await loop.run_in_executor(None, on_a_subshell, d.buttons["door"].click)
+        await _until(lambda: d.frame.t > 1.0, 10.0)
+        await loop.run_in_executor(None, on_a_subshell, d.stop_button.click)
+        await _drive_ends(d)
+        return d
+
+    d = asyncio.run(errand())
+    assert [name for name, _ in acted_on] == ["go_to", "stop"]
+    assert all(thread == home for _, thread in acted_on)
+    assert [t.after for t in d.mission.transitions] == ["navigating", "idle"]
+    assert _rests(d) < 0.01
+
+
 def test_a_second_command_while_driving_is_queued_then_run():
     async def errands():
         d = _dashboard(on_busy="queue")

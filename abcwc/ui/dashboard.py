@@ -27,6 +27,15 @@ moves (only what moves is drawn again, :mod:`abcwc.ui.map_view`), and the task e
 the mission is no longer driving and the chair is still. The map is drawn at the pixel
 size it is shown, times the screen's device pixel ratio, so it stays sharp.
 
+**One thread.** JupyterLab (4.4 and later, with ipykernel 7) may deliver widget
+messages on a kernel *subshell*: another thread, with an event loop of its own, that
+keeps widgets answering while a cell runs. A button handled there would change the
+mission while the drive task steps it on the main thread (a stop in the middle of the
+navigator's decision left the mission "failed: cancelled"). So every widget callback is
+handed to the dashboard's own loop (``call_soon_threadsafe``; the loop running where the
+dashboard was made), and the mission, the body and the drawing are only ever touched
+from that one thread.
+
 **One errand at a time.** A second command while the mission drives is queued
 (``on_busy="queue"``: it starts when the errand ends, and a newer one takes its place) or
 refused (``on_busy="refuse"``), and the view says which. Stop always acts at once and
@@ -152,6 +161,7 @@ class Dashboard:
         self.picks: list[tuple[str, str]] = []  # (how, option) of every choice made
         self._task: asyncio.Task | None = None
         self._scan_task: asyncio.Task | None = None
+        self._loop = _running_loop()  # the one the dashboard drives from (module notes)
         self._track: list[tuple[float, float, float, float]] = []  # t, estimate x, y, th
         self._truth_speed = 0.0
         self.token = f"abcwc-{uuid.uuid4().hex[:8]}"
@@ -162,22 +172,22 @@ class Dashboard:
                            {n: p for n, p in mission.destinations.items()},
                            chair.params, width=width)
         self.front_end = FrontEnd(token=self.token, switch_key=switch_key)
-        self.front_end.on_msg(self._on_front_end)
-        self.front_end.observe(self._on_pixel_ratio, names="pixel_ratio")
+        self.front_end.on_msg(self._handler(self._on_front_end))
+        self.front_end.observe(self._handler(self._on_pixel_ratio), names="pixel_ratio")
         big = widgets.Layout(width="220px", height="44px")
         self.buttons = {}
         for name in self.destinations:
             button = widgets.Button(description=name.replace("_", " "), layout=big,
                                     tooltip=f"go to the {name.replace('_', ' ')}")
             button.style.font_size = "16px"
-            button.on_click(lambda _b, name=name: self.choose(name, "button"))
+            button.on_click(self._handler(lambda _b, name=name: self.choose(name, "button")))
             self.buttons[name] = button
         self.stop_button = widgets.Button(description="STOP", button_style="danger",
                                           tooltip="stop the chair now",
                                           layout=widgets.Layout(width="220px", height="90px"))
         self.stop_button.style.font_size = "30px"
         self.stop_button.style.font_weight = "bold"
-        self.stop_button.on_click(lambda _b: self.choose(STOP, "button"))
+        self.stop_button.on_click(self._handler(lambda _b: self.choose(STOP, "button")))
         self.buttons[STOP] = self.stop_button
         for name, button in self.buttons.items():
             button.add_class(self.token)
@@ -185,16 +195,16 @@ class Dashboard:
         self.command_box = widgets.Text(placeholder='type "go to the ..." and press enter',
                                         continuous_update=False,
                                         layout=widgets.Layout(width="400px"))
-        self.command_box.observe(self._on_typed, names="value")
+        self.command_box.observe(self._handler(self._on_typed), names="value")
         self.dwell_toggle = widgets.ToggleButton(
             value=bool(dwell), description="dwell to select",
             tooltip=f"rest the pointer on a choice for {self.dwell.dwell_seconds:g} s to "
                     f"pick it")
-        self.dwell_toggle.observe(lambda _change: self._light(), names="value")
+        self.dwell_toggle.observe(self._handler(lambda _change: self._light()), names="value")
         self.scan_toggle = widgets.ToggleButton(value=False, description="switch scanning",
                                                 tooltip="light the choices in turn; the "
                                                 "switch key picks the lit one")
-        self.scan_toggle.observe(self._on_scan_toggle, names="value")
+        self.scan_toggle.observe(self._handler(self._on_scan_toggle), names="value")
         self.state_line = widgets.HTML()
         self.notice_line = widgets.HTML()
         self.safety_line = widgets.HTML()
@@ -217,6 +227,29 @@ class Dashboard:
             self.truth_line, self.front_end])
         self._say("choose a destination")
         self.redraw()
+
+    # ------------------------------------------------------------------ one loop
+    def _home_loop(self) -> asyncio.AbstractEventLoop:
+        """The event loop the dashboard drives from: the one running where it was made,
+        else the first on which it is asked to act; RuntimeError when none runs."""
+        if self._loop is None:
+            self._loop = _event_loop()
+        return self._loop
+
+    def _handler(self, act: Callable[..., object]) -> Callable[..., None]:
+        """``act`` as a widget callback that runs on the dashboard's own event loop,
+        handed over to it when the message arrives on another thread's loop (module
+        notes)."""
+
+        def handle(*args: object) -> None:
+            here = _running_loop()
+            home = self._loop or here
+            if home is None or here is home or home.is_closed():  # nothing to race
+                act(*args)
+            else:
+                home.call_soon_threadsafe(act, *args)
+
+        return handle
 
     # ------------------------------------------------------------------ showing
     def show(self) -> None:
@@ -250,7 +283,7 @@ class Dashboard:
     def choose(self, option: str, how: str = "button") -> None:
         """``option`` (a destination or ``"stop"``) was picked ``how`` ("button",
         "dwell", "switch")."""
-        _event_loop()  # before anything changes
+        self._home_loop()  # before anything changes
         self.picks.append((how, option))
         if how != "dwell":
             self.dwell.picked(option)
@@ -267,7 +300,7 @@ class Dashboard:
     def command(self, text: str | SpokenCommand) -> None:
         """A typed command, in the mission's grammar; a phrase it does not know is
         shown with the list of those it does."""
-        _event_loop()  # before anything changes
+        self._home_loop()  # before anything changes
         try:
             spoken = (text if isinstance(text, SpokenCommand)
                       else self.mission.commands.parse(text))
@@ -286,7 +319,7 @@ class Dashboard:
         """A click on the map ``(px, py)`` CSS px from its top left: go to that point
         (:meth:`MapView.to_map <abcwc.ui.map_view.MapView.to_map>`); a click off the map
         is shown and does nothing."""
-        _event_loop()  # before anything changes
+        self._home_loop()  # before anything changes
         try:
             x, y = self.map.to_map(px, py)
         except ValueError as error:
@@ -297,7 +330,7 @@ class Dashboard:
 
     def stop(self, reason: str = "stop pressed") -> None:
         """Stop at once (the chair brakes through the safety filter) and empty the queue."""
-        _event_loop()  # before anything changes
+        self._home_loop()  # before anything changes
         dropped = self.queued
         self.queued = None
         self.mission.stop(reason)
@@ -353,7 +386,7 @@ class Dashboard:
     def _start_drive(self) -> None:
         """Run the drive task on the running event loop unless it already runs."""
         if not self.driving:
-            self._task = _event_loop().create_task(self._drive())
+            self._task = self._home_loop().create_task(self._drive())
 
     async def _drive(self) -> None:
         """Step the body, keeping to ``time_scale``, until the mission stops driving and
@@ -475,7 +508,7 @@ class Dashboard:
         if event == "enter" and option in self.buttons and self.dwell_toggle.value:
             self.dwell.enter(option, now)
             self._light()
-            _event_loop().call_later(self.dwell.dwell_seconds + 0.02,
+            self._home_loop().call_later(self.dwell.dwell_seconds + 0.02,
                                                   self._dwell_check)
         elif event == "leave":
             self.dwell.leave(option, now)
@@ -503,7 +536,7 @@ class Dashboard:
         if change["new"]:
             self.scanner.start(time.monotonic())
             self.front_end.scanning = True
-            self._scan_task = _event_loop().create_task(self._scan())
+            self._scan_task = self._home_loop().create_task(self._scan())
         else:
             self.scanner.stop()
             self.front_end.scanning = False
@@ -556,6 +589,14 @@ def voila_command(port: int = 8866, open_browser: bool = True,
     return [sys.executable, "-m", "voila", str(notebook), f"--port={port}",
             f"--Voila.ip={VOILA_IP}", *VOILA_OPTIONS,
             *([] if open_browser else ["--no-browser"])]
+
+
+def _running_loop() -> asyncio.AbstractEventLoop | None:
+    """The event loop running in this thread, or None."""
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        return None
 
 
 def _event_loop() -> asyncio.AbstractEventLoop:

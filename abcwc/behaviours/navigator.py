@@ -51,6 +51,7 @@ from abcwc.geometry import compose, position_of, wrap_angle
 from abcwc.mapping.grid import GridGeometry
 from abcwc.navigation.costmap import (
     FREE_SPACE,
+    INSCRIBED,
     LETHAL,
     NO_INFORMATION,
     Costmap,
@@ -59,8 +60,15 @@ from abcwc.navigation.costmap import (
 )
 from abcwc.navigation.dwa import DwaPlanner, DwaResult
 from abcwc.navigation.localization import MapLocalizer, occupied_points, wall_points
+from abcwc.navigation.passages import (
+    Gap,
+    close_gap,
+    gaps_along,
+    minimum_clear_width,
+    narrowest_gap,
+)
 from abcwc.navigation.people import PeopleTracker, predicted_sweep, standing_still
-from abcwc.navigation.planner import NoPathError, Path, plan
+from abcwc.navigation.planner import NoPathError, Path, costs_to_goal, plan
 from abcwc.navigation.range_layer import RangeSensorLayer
 from abcwc.params import ChairParams, default_params, load_navigation_params
 from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame, Twist
@@ -149,10 +157,15 @@ class NavigatorSettings:
     footprint_padding: float = 0.05  # m round the footprint in DWA's collision check
     range_mark_wall_distance: float = 0.25  # m: sonar/IR marks this near a map wall are it
     range_mark_decay: float = 1.0  # s: time constant of the sonar/IR marks' fading
+    scan_mark_wall_distance: float = 0.15  # m: lidar marks this near a map wall are it
     relocalise_patience: float = 10.0  # s of searching for the chair's place when lost
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.15  # m/s
     max_recoveries: int = 4
+    gap_look_ahead: float = 1.5  # m of plan ahead searched for the gap a recovery closes
+    gap_width: float = 1.5  # m: a gap at most this wide may be closed by a recovery
+    door_margin: float = 0.1  # m each side beyond the chair's need: narrower is a door
+    door_approach: float = 1.0  # m each side of a door's middle followed along its axis
     goal_timeout: float | None = None  # s; None: 60 s + 3 x the plan's length / max_vel_x
 
     def __post_init__(self) -> None:
@@ -204,6 +217,9 @@ class Navigator(BehaviourBase):
             local, padding=s.footprint_padding,
             braking_delay=(self.stopping.reaction_time
                            + s.acc_lim_x / self.stopping.limits.max_jerk))
+        # the planner keeps the chair's centre as far from obstacles as DWA's check does
+        # (module notes, "one passability")
+        self.passing_radius = self.dwa.passing_radius(static_map.resolution)
         self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
         self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
         self.range_layer = RangeSensorLayer(static_map)
@@ -217,6 +233,7 @@ class Navigator(BehaviourBase):
         self.path: Path | None = None
         self.local_costmap: Costmap | None = None
         self.feedback: Feedback | None = None
+        self._inscribed_costmap: Costmap | None = None  # built when a plan fails
         self._clear_goal_state()
 
     # ------------------------------------------------------------------ building
@@ -265,7 +282,8 @@ class Navigator(BehaviourBase):
             return
         if cost >= LETHAL - 1:
             self.fail(f"the goal ({gx:.2f}, {gy:.2f}) m is too close to a wall for the "
-                      f"chair (closer than its inscribed radius)")
+                      f"chair (closer than the {self.passing_radius:.2f} m its centre keeps "
+                      f"from walls)")
             return
         self._replan(self.localizer.pose, math.nan)
 
@@ -374,6 +392,12 @@ class Navigator(BehaviourBase):
           chair still stops short."""
         s, command = self.settings, result.command
         cap = max(s.narrow_speed, s.max_vel_x * max(result.gap, 0.0) / s.slow_within)
+        near_door = min((math.hypot(pose.x - door.x, pose.y - door.y) for door in self.doors),
+                        default=math.inf)
+        if near_door < 2 * s.door_approach:  # door mode: slowly, to line up, from a
+            # door_approach out (where the axis begins), at narrow_speed inside it
+            cap = min(cap, s.narrow_speed + (s.max_vel_x - s.narrow_speed)
+                      * max(near_door / s.door_approach - 1.0, 0.0))
         discs = self.people.moving_discs()
         if len(discs):
             near = float(self.dwa.people_gap(pose, np.zeros((1, 2)), standing_still(discs),
@@ -403,16 +427,27 @@ class Navigator(BehaviourBase):
         self._blocked_since: float | None = None
         self._recovery: tuple[str, float, Pose2D] | None = None
         self._recoveries = 0
+        self._stuck_at = math.inf  # m of plan left when the first recovery began
+        self._closed: list[Gap] = []  # gaps closed by a recovery, for this goal
+        self.recoveries_used: dict[str, int] = {}  # this goal's recoveries, by kind
+        self._best_remaining = math.inf  # m to go (_to_go) at the last progress
+        self._to_goal: np.ndarray | None = None  # m to go from every cell
+        self.doors: list[Gap] = []  # the narrow doors on the plan (door mode)
         self._anchor: tuple[float, Pose2D] | None = None
         self._phase = "planning"
         self._keep_heading = True
         self.path = None
 
-    def _inflated(self, cost: np.ndarray, grid: GridGeometry) -> Costmap:
+    def _inflated(self, cost: np.ndarray, grid: GridGeometry,
+                  keep_out: bool = True) -> Costmap:
+        """``cost`` inflated; with ``keep_out`` the centre is kept ``passing_radius`` m
+        from obstacles (the planner's map), else only the inscribed radius (costmap_2d's
+        rule, which names the gap a refused plan would have squeezed through)."""
         costmap = Costmap.like(grid)
         costmap.cost = cost
         costmap.inflate(self.footprint.inscribed_radius, self.settings.inflation_radius,
-                        self.settings.cost_scaling_factor)
+                        self.settings.cost_scaling_factor,
+                        keep_out_radius=self.passing_radius if keep_out else 0.0)
         return costmap
 
     def _with_obstacles(self, marks: np.ndarray) -> Costmap:
@@ -427,7 +462,7 @@ class Navigator(BehaviourBase):
         patch = Costmap(grid.resolution, c1 - c0, r1 - r0, grid.origin)  # cells alone matter
         patch.cost = np.where(marks[box], LETHAL, grid.cost[box]).astype(np.uint8)
         patch.inflate(self.footprint.inscribed_radius, self.settings.inflation_radius,
-                      self.settings.cost_scaling_factor)
+                      self.settings.cost_scaling_factor, keep_out_radius=self.passing_radius)
         costmap = Costmap.like(grid)
         costmap.cost = self.global_costmap.cost.copy()
         costmap.cost[box] = np.maximum(costmap.cost[box], patch.cost)
@@ -489,7 +524,9 @@ class Navigator(BehaviourBase):
             # where people will walk: the plan goes round it, not into their way
             marks |= predicted_sweep(self.people.moving_discs(), self.static_map,
                                      s.people_horizon)
-            marks &= self.static_map.cost != LETHAL
+            # a return this near a mapped wall is the wall (the estimate's few cm): marked
+            # beside it, it would narrow every door by a cell
+            marks &= self._wall_distance > s.scan_mark_wall_distance
             if marks.any():
                 costmap = self._with_obstacles(marks)
         # what the scan sees may be people in a doorway: if it blocks every way, plan on
@@ -503,16 +540,20 @@ class Navigator(BehaviourBase):
                 reason = str(error)
         if found is None:
             if local is None:  # the first plan: the goal cannot be reached from here
-                self.fail(f"no path to the goal: {reason}")
+                self.fail(self._no_way(pose, reason))
                 return
             if self._plan_failing_since is None:
                 self._plan_failing_since = now
             if now - self._plan_failing_since > s.planner_patience:
-                self.fail(f"no path to the goal for "
-                          f"{now - self._plan_failing_since:.0f} s: {reason}")
+                self.fail(f"{self._no_way(pose, reason)} (for "
+                          f"{now - self._plan_failing_since:.0f} s)")
             return
         self._plan_failing_since = None
-        self.path = found  # followed as planned: see NavigatorSettings on smoothing
+        # followed as planned (see NavigatorSettings on smoothing), but straight along
+        # the axis of every narrow door
+        self.path = self._through_doors(found, costmap)
+        if self._to_goal is None:  # the progress check's measure, for this goal
+            self._to_goal = costs_to_goal(self._closed_map(self.global_costmap), self.goal)
         if not math.isfinite(self._timeout):
             self._timeout = (self.settings.goal_timeout if self.settings.goal_timeout
                              else 60.0 + 3.0 * self.path.length / s.max_vel_x)
@@ -523,7 +564,112 @@ class Navigator(BehaviourBase):
         return bool(len(discs)) and bool((np.hypot(discs[:, 2], discs[:, 3]) > 0.2).any())
 
     def _plan_on(self, costmap: Costmap, pose: Pose2D) -> Path:
+        costmap = self._closed_map(costmap)
         return plan(costmap, _free_start(costmap, pose), self.goal)
+
+    def _closed_map(self, costmap: Costmap) -> Costmap:
+        """``costmap`` with the gaps a recovery closed shut."""
+        for gap in self._closed:
+            costmap = close_gap(costmap, gap)
+        return costmap
+
+    def _to_go(self, pose: Pose2D) -> float:
+        """m (free floor metres) of the least way from the chair to the goal on the
+        planner's map: the progress check's measure, which does not change with the
+        plan (a plan that flips between two ways would otherwise reset it)."""
+        if self._to_goal is None:
+            return math.inf
+        x, y = _free_start(self.global_costmap, pose)
+        rows, cols = self.global_costmap.world_to_cell(np.array([[x, y]]))
+        if not self.global_costmap.contains(rows[0], cols[0]):
+            return math.inf
+        return float(self._to_goal[rows[0], cols[0]])
+
+    def _no_way(self, pose: Pose2D, reason: str) -> str:
+        """Why no plan keeps the chair's centre ``passing_radius`` from walls: the gap the
+        way would have to squeeze through, found by planning with only the inscribed
+        circle kept out (costmap_2d's rule), or the planner's own ``reason``."""
+        if self._inscribed_costmap is None:
+            self._inscribed_costmap = self._inflated(self.static_map.cost.copy(),
+                                                     self.static_map, keep_out=False)
+        refused = ", ".join(gap.describe() for gap in self._closed)
+        refused = (f"the chair found no safe way through {refused} "
+                   f"({self._recoveries} recoveries)" if refused else "")
+        try:
+            squeezed = self._plan_on(self._inscribed_costmap, pose)
+        except NoPathError:
+            if refused:
+                return f"no passable way to the goal: {refused}, and no other way leads there"
+            return f"no path to the goal: {reason}"
+        gap = narrowest_gap(self.static_map, squeezed.cells, self.passing_radius)
+        if gap is None:
+            narrow = (f"the only way passes closer to a wall than the "
+                      f"{self.passing_radius:.2f} m the chair's centre keeps")
+        else:
+            narrow = (f"{gap.describe()} is narrower than the chair needs, "
+                      f"{minimum_clear_width(self.passing_radius):.2f} m")
+        if refused:
+            return f"no passable way to the goal: {refused}, and the other way: {narrow}"
+        return f"no {'passable way' if gap else 'path'} to the goal: {narrow}"
+
+    def _through_doors(self, path: Path, costmap: Costmap) -> Path:
+        """Door mode: where the path goes through a gap less than ``door_margin`` m each
+        side wider than the chair needs, the path within ``door_approach`` m of the
+        gap's middle is replaced by the gap's axis, so that the chair lines up with the
+        opening before it enters and follows its centre line through (as a person
+        pushing a wheelchair does; the last metre of Nav2's docking approach). Each side
+        of the axis is cut short where it would leave the planner's free cells."""
+        s = self.settings
+        narrow = minimum_clear_width(self.passing_radius) + 2 * s.door_margin
+        doors = [g for g in gaps_along(self.static_map, path.cells, self._wall_distance,
+                                       narrow / 2) if g.width < narrow]
+        self.doors = doors
+        points = path.points
+        for door in doors:
+            centre = np.array([door.x, door.y])
+            unit = np.array([-math.sin(door.across), math.cos(door.across)])
+            distance = np.hypot(*(points - centre).T)
+            k = int(np.argmin(distance))
+            travel = points[min(k + 3, len(points) - 1)] - points[max(k - 3, 0)]
+            if travel @ unit < 0:
+                unit = -unit
+            before = self._free_along(costmap, centre, -unit)
+            after = self._free_along(costmap, centre, unit)
+            outside = distance > s.door_approach
+            i0 = int(np.flatnonzero(outside[:k])[-1]) if outside[:k].any() else 0
+            i1 = k + int(np.flatnonzero(outside[k:])[0]) if outside[k:].any() else len(points) - 1
+            along = np.arange(-before, after + s.resolution / 2, s.resolution)
+            points = np.concatenate([points[:i0 + 1], centre + along[:, None] * unit,
+                                     points[i1:]])
+        if not doors:
+            return path
+        rows, cols = self.static_map.world_to_cell(points)
+        return Path(np.column_stack([rows, cols]), points, path.cost)
+
+    def _free_along(self, costmap: Costmap, centre: np.ndarray, unit: np.ndarray) -> float:
+        """m from ``centre`` along ``unit`` (up to ``door_approach``) over cells the
+        planner may cross."""
+        s = self.settings
+        steps = np.arange(0.0, s.door_approach + s.resolution / 2, s.resolution)
+        rows, cols = costmap.world_to_cell(centre + steps[:, None] * unit)
+        inside = costmap.contains(rows, cols)
+        free = np.zeros(len(steps), dtype=bool)
+        free[inside] = costmap.cost[rows[inside], cols[inside]] < INSCRIBED
+        blocked = np.flatnonzero(~free)
+        return float(steps[blocked[0] - 1]) if blocked.size and blocked[0] > 0 else (
+            0.0 if blocked.size else float(steps[-1]))
+
+    def _gap_ahead(self, pose: Pose2D) -> Gap | None:
+        """The narrowest gap on the map the plan passes within ``gap_look_ahead`` m."""
+        if self.path is None:
+            return None
+        ahead = self._path_ahead(pose)
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
+        rows, cols = self.static_map.world_to_cell(ahead[along <= self.settings.gap_look_ahead])
+        inside = self.static_map.contains(rows, cols)
+        cells = np.column_stack([rows[inside], cols[inside]])
+        gap = narrowest_gap(self.static_map, cells, self.settings.gap_width / 2)
+        return gap if gap is not None and gap.width <= self.settings.gap_width else None
 
     def _path_ahead(self, pose: Pose2D) -> np.ndarray:
         """The plan from its point nearest the chair on, as points every resolution."""
@@ -552,12 +698,21 @@ class Navigator(BehaviourBase):
         return Twist(0.0, math.copysign(min(s.in_place_turn_rate, 2.0 * abs(error)), error))
 
     def _oscillating(self, now: float, pose: Pose2D) -> bool:
-        """move_base's check: not ``oscillation_distance`` from where the chair was
-        ``oscillation_timeout`` s ago. Progress resets the recovery count."""
-        t0, anchor = self._anchor  # type: ignore[misc]
+        """The progress check (move_base's oscillation check, Nav2's progress checker),
+        judged by the way left to the goal (:meth:`_to_go`), not by moving: no progress
+        when it has not fallen ``oscillation_distance`` below its best in
+        ``oscillation_timeout`` s (a chair that circles in front of a door moves all the
+        time, and gets nowhere). The recovery count
+        resets only when the chair gets ``oscillation_distance`` nearer than where its
+        first recovery began: backing off from a gap and driving up to it again is not
+        progress."""
+        t0, _ = self._anchor  # type: ignore[misc]
         s = self.settings
-        if math.hypot(pose.x - anchor.x, pose.y - anchor.y) >= s.oscillation_distance:
-            self._anchor, self._recoveries = (now, pose), 0
+        remaining = self._to_go(pose)
+        if remaining < self._best_remaining - s.oscillation_distance:
+            self._anchor, self._best_remaining = (now, pose), remaining
+            if remaining < self._stuck_at - s.oscillation_distance:
+                self._recoveries, self._stuck_at = 0, math.inf
             return False
         return now - t0 > s.oscillation_timeout
 
@@ -571,11 +726,28 @@ class Navigator(BehaviourBase):
             self._phase = "waiting for the way to clear"
             return Twist(0.0, 0.0)
         if self._recoveries >= s.max_recoveries:
-            self.fail(f"stuck: no safe way on after {self._recoveries} recoveries")
+            gap = self._gap_ahead(pose)
+            where = f" at {gap.describe()}" if gap else ""
+            self.fail(f"stuck{where}: no safe way on after {self._recoveries} recoveries")
             return Twist(0.0, 0.0)
         self._recoveries += 1
         self._blocked_since = None
         self._anchor = (frame.t, pose)
+        self._stuck_at = min(self._stuck_at, self._to_go(pose))
+        if self._recoveries == 2:  # the second: forget what the rangers marked, re-plan
+            self._used("clearing the local costmap")
+            self.range_layer = RangeSensorLayer(self.static_map)
+            self._next_plan = frame.t
+            return Twist(0.0, 0.0)
+        gap = self._gap_ahead(pose) if self._recoveries == 3 else None
+        if gap is not None:  # the third: the gap ahead is closed, and the plan goes round
+            self._used("closing the gap ahead")
+            self._closed.append(gap)
+            self._to_goal = None  # measured again on the map with the gap shut
+            self._replan(pose, frame.t)
+            if self.running:  # a new way: progress and the count are measured along it
+                self._best_remaining = self._stuck_at = self._to_go(pose)
+            return Twist(0.0, 0.0)
         behind, _ = self.stopping.clearance(frame, forward=False)
         back = compose(pose, (-s.back_off_distance, 0.0, 0.0))
         if (behind > s.back_off_distance + self.stopping.braking_distance(s.back_off_speed)
@@ -586,8 +758,13 @@ class Navigator(BehaviourBase):
             self._recovery = ("turning on the spot", frame.t, pose)
         else:  # no room to move: keep waiting, which counts as a try
             self._phase = "waiting: no room to back off or turn"
+            self._used("waiting")
             return Twist(0.0, 0.0)
+        self._used(self._recovery[0])
         return self._recover(frame, pose)
+
+    def _used(self, recovery: str) -> None:
+        self.recoveries_used[recovery] = self.recoveries_used.get(recovery, 0) + 1
 
     def _footprint_free(self, poses: list) -> bool:
         """Whether the footprint at every pose is off lethal cells of the local costmap."""

@@ -164,7 +164,7 @@ class NavigatorSettings:
     max_recoveries: int = 4
     gap_look_ahead: float = 1.5  # m of plan ahead searched for the gap a recovery closes
     gap_width: float = 1.5  # m: a gap at most this wide may be closed by a recovery
-    door_margin: float = 0.1  # m each side beyond the chair's need: narrower is a door
+    door_margin: float = 0.15  # m each side beyond the chair's need: narrower is a door
     door_approach: float = 1.0  # m each side of a door's middle followed along its axis
     goal_timeout: float | None = None  # s; None: 60 s + 3 x the plan's length / max_vel_x
 
@@ -429,6 +429,7 @@ class Navigator(BehaviourBase):
         self._recoveries = 0
         self._stuck_at = math.inf  # m of plan left when the first recovery began
         self._closed: list[Gap] = []  # gaps closed by a recovery, for this goal
+        self._only_way: Gap | None = None  # a gap the chair is stuck at with no way round
         self.recoveries_used: dict[str, int] = {}  # this goal's recoveries, by kind
         self._best_remaining = math.inf  # m to go (_to_go) at the last progress
         self._to_goal: np.ndarray | None = None  # m to go from every cell
@@ -726,6 +727,11 @@ class Navigator(BehaviourBase):
             self._phase = "waiting for the way to clear"
             return Twist(0.0, 0.0)
         if self._recoveries >= s.max_recoveries:
+            if self._only_way is not None:
+                self.fail(f"no passable way to the goal: the chair found no safe way through "
+                          f"{self._only_way.describe()} ({self._recoveries} recoveries), and "
+                          f"no other way leads there")
+                return Twist(0.0, 0.0)
             gap = self._gap_ahead(pose)
             where = f" at {gap.describe()}" if gap else ""
             self.fail(f"stuck{where}: no safe way on after {self._recoveries} recoveries")
@@ -740,7 +746,8 @@ class Navigator(BehaviourBase):
             self._next_plan = frame.t
             return Twist(0.0, 0.0)
         gap = self._gap_ahead(pose) if self._recoveries == 3 else None
-        if gap is not None:  # the third: the gap ahead is closed, and the plan goes round
+        if gap is not None and self._way_round(gap, pose):
+            # the third: the gap ahead is closed, and the plan goes round it
             self._used("closing the gap ahead")
             self._closed.append(gap)
             self._to_goal = None  # measured again on the map with the gap shut
@@ -748,6 +755,8 @@ class Navigator(BehaviourBase):
             if self.running:  # a new way: progress and the count are measured along it
                 self._best_remaining = self._stuck_at = self._to_go(pose)
             return Twist(0.0, 0.0)
+        if gap is not None:  # the only way: keep trying it (people move), then give up
+            self._only_way = gap
         behind, _ = self.stopping.clearance(frame, forward=False)
         back = compose(pose, (-s.back_off_distance, 0.0, 0.0))
         if (behind > s.back_off_distance + self.stopping.braking_distance(s.back_off_speed)
@@ -765,6 +774,15 @@ class Navigator(BehaviourBase):
 
     def _used(self, recovery: str) -> None:
         self.recoveries_used[recovery] = self.recoveries_used.get(recovery, 0) + 1
+
+    def _way_round(self, gap: Gap, pose: Pose2D) -> bool:
+        """Whether the map has a way to the goal with ``gap`` closed too."""
+        costmap = close_gap(self._closed_map(self.global_costmap), gap)
+        try:
+            plan(costmap, _free_start(costmap, pose), self.goal)
+        except NoPathError:
+            return False
+        return True
 
     def _footprint_free(self, poses: list) -> bool:
         """Whether the footprint at every pose is off lethal cells of the local costmap."""

@@ -631,14 +631,17 @@ class Navigator(BehaviourBase):
             unit = np.array([-math.sin(door.across), math.cos(door.across)])
             distance = np.hypot(*(points - centre).T)
             k = int(np.argmin(distance))
-            travel = points[min(k + 3, len(points) - 1)] - points[max(k - 3, 0)]
-            if travel @ unit < 0:
-                unit = -unit
-            before = self._free_along(costmap, centre, -unit)
-            after = self._free_along(costmap, centre, unit)
             outside = distance > s.door_approach
             i0 = int(np.flatnonzero(outside[:k])[-1]) if outside[:k].any() else 0
             i1 = k + int(np.flatnonzero(outside[k:])[0]) if outside[k:].any() else len(points) - 1
+            if (points[i1] - points[i0]) @ unit < 0:  # the axis the way the path goes
+                unit = -unit
+            before = self._free_along(costmap, centre, -unit)
+            after = self._free_along(costmap, centre, unit)
+            if i0 == 0:  # the path starts near the door: the axis from level with it
+                before = min(before, max(-float((points[0] - centre) @ unit), 0.0))
+            if i1 == len(points) - 1:  # and ends near it: the axis up to level with its end
+                after = min(after, max(float((points[-1] - centre) @ unit), 0.0))
             along = np.arange(-before, after + s.resolution / 2, s.resolution)
             points = np.concatenate([points[:i0 + 1], centre + along[:, None] * unit,
                                      points[i1:]])

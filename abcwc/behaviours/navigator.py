@@ -7,7 +7,14 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
    ground truth);
 2. **plans** over the global costmap (the static map plus what the lidar sees now,
    inflated) with :func:`~abcwc.navigation.planner.plan`, again every
-   ``1 / planner_frequency`` s;
+   ``1 / planner_frequency`` s. **One passability**: the costmap keeps the chair's
+   centre :meth:`~abcwc.navigation.dwa.DwaPlanner.passing_radius` (0.38 m) from every
+   wall cell, not only the inscribed radius (0.16 m), so the planner plans only through
+   gaps the local planner takes (the chair needs 0.76 m between wall cells), and a gap
+   it would refuse costs the planner the detour round it. In **door mode** the plan
+   through a door less than ``door_margin`` each side wider than that follows the
+   door's axis for ``door_approach`` m either side, and the chair slows to
+   ``narrow_speed``, so that it lines up before it enters (:meth:`_through_doors`);
 3. **follows** it with :class:`~abcwc.navigation.dwa.DwaPlanner` on a rolling local
    costmap (5 x 5 m) built from the static map, the newest scan and the sonar's and IR
    rangers' marks that the map does not explain (a
@@ -19,17 +26,22 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
 4. **slows down** for the goal (no faster than it can stop from half-way into the
    tolerance), **turns to the goal's heading** once within ``xy_goal_tolerance``, and
    succeeds within ``yaw_goal_tolerance``, standing still;
-5. **recovers** when no safe trajectory is left or the chair has not moved
-   ``oscillation_distance`` in ``oscillation_timeout`` s (move_base's oscillation
-   check): it waits ``controller_patience`` s for the way to clear (people move), then
-   backs off a little if the IR ring sees the way behind clear, then re-plans; after
-   ``max_recoveries`` recoveries without progress it gives up with the reason.
+5. **recovers** when no safe trajectory is left or the chair has come no
+   ``oscillation_distance`` nearer the goal (the least way left on the map) in
+   ``oscillation_timeout`` s (Nav2's progress checker, judged by the goal): it waits
+   ``controller_patience`` s for the way to clear (people move), then recovers, in
+   order (after Nav2's recovery tree): backs off a little if the IR ring sees the way
+   behind clear (else turns on the spot), clears the local costmap's sonar and IR marks,
+   closes the gap ahead and plans round it if the map has a way round, backs off again;
+   after ``max_recoveries`` recoveries without progress it gives up with the reason.
 
 It ends **succeeded**, or **failed** with a reason a person can act on: the goal is
-off the map or in a wall, no path leads there, the chair is stuck, lost, or out of
-time, or the goal was cancelled. Every command it sends passes through the body's
-:class:`~abcwc.control.safety.SafetyFilter` in the control loop (:mod:`abcwc.base`):
-there is no way round it; its DWA plans brakes the filter's ramp can follow.
+off the map or in a wall, no path leads there, no passable way (naming the gap: "the
+0.75 m gap at (6.03, 2.50) is narrower than the chair needs, 0.76 m"), the chair is
+stuck, lost, or out of time, or the goal was cancelled. Every command it sends passes
+through the body's :class:`~abcwc.control.safety.SafetyFilter` in the control loop
+(:mod:`abcwc.base`): there is no way round it; its DWA plans brakes the filter's ramp
+can follow.
 
 :class:`NavigatorSettings` holds A.17's values where they suit a chair with a person
 in it, and says why where they do not.
@@ -126,6 +138,12 @@ class NavigatorSettings:
       cell is wider than a door's clearance).
     * recoveries on (A.17 off): a chair that stops for good in a corridor because a
       person stood in its way has failed its passenger.
+    * ``door_margin`` 0.15 m and ``door_approach`` 1 m (A.17 has no door mode): the
+      floor's 1 m doors fall inside it; turning into one from the 2 m corridor, beside a
+      walker, without it, the chair swung a corner onto a jamb and wedged there.
+    * ``scan_mark_wall_distance`` 0.15 m: a return this near a mapped wall is the wall;
+      marked for the plan beside it, a jamb's returns narrowed a 0.80 m door below the
+      passing width, and the plan flipped between the door and the way round.
     """
 
     controller_frequency: float = 5.0  # Hz, A.17

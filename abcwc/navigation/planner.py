@@ -22,6 +22,10 @@ grids.
 
 :func:`smooth` then shortens the cell path by cutting corners where the straight line
 between two path cells crosses no costlier cells than the path itself did.
+
+:func:`costs_to_goal` runs the same moves from the goal until every cell is settled
+(Dijkstra, :func:`dijkstra_costs`): each cell's least cost to the goal, the measure the
+navigator's progress check reads, which does not change when the plan does.
 """
 
 from __future__ import annotations

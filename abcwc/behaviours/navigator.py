@@ -445,7 +445,7 @@ class Navigator(BehaviourBase):
         self._blocked_since: float | None = None
         self._recovery: tuple[str, float, Pose2D] | None = None
         self._recoveries = 0
-        self._stuck_at = math.inf  # m of plan left when the first recovery began
+        self._stuck_at = math.inf  # m to go (_to_go) when the first recovery began
         self._closed: list[Gap] = []  # gaps closed by a recovery, for this goal
         self._only_way: Gap | None = None  # a gap the chair is stuck at with no way round
         self.recoveries_used: dict[str, int] = {}  # this goal's recoveries, by kind
@@ -724,17 +724,16 @@ class Navigator(BehaviourBase):
         judged by the way left to the goal (:meth:`_to_go`), not by moving: no progress
         when it has not fallen ``oscillation_distance`` below its best in
         ``oscillation_timeout`` s (a chair that circles in front of a door moves all the
-        time, and gets nowhere). The recovery count
-        resets only when the chair gets ``oscillation_distance`` nearer than where its
-        first recovery began: backing off from a gap and driving up to it again is not
-        progress."""
+        time, and gets nowhere). The recovery count resets only when the chair gets
+        ``oscillation_distance`` nearer than where its first recovery began: backing off
+        from a gap and driving up to it again is not progress."""
         t0, _ = self._anchor  # type: ignore[misc]
         s = self.settings
         remaining = self._to_go(pose)
         if remaining < self._best_remaining - s.oscillation_distance:
             self._anchor, self._best_remaining = (now, pose), remaining
             if remaining < self._stuck_at - s.oscillation_distance:
-                self._recoveries, self._stuck_at = 0, math.inf
+                self._recoveries, self._stuck_at, self._only_way = 0, math.inf, None
             return False
         return now - t0 > s.oscillation_timeout
 

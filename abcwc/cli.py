@@ -1,4 +1,5 @@
-"""The abcwc command: demo, bench, posegraph, slam, navtrial, errands and course build.
+"""The abcwc command: demo, bench, posegraph, slam, navtrial, errands, dashboard and course
+build.
 
 Every command takes the same few options:
 
@@ -25,6 +26,8 @@ import contextlib
 import io
 import json
 import math
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -239,7 +242,8 @@ def _slam(args: argparse.Namespace) -> int:
 
 NAVTRIAL_GOAL_FIGURES = ("status", "reason", "reached", "seconds", "driven", "straight",
                          "planned", "final_error", "final_heading_error", "collisions",
-                         "lethal_periods", "closest_person", "max_localisation_error", "phases")
+                         "lethal_periods", "closest_person", "max_localisation_error", "phases",
+                         "recoveries")
 """Each goal's figures in ``navtrial --json`` (m, s, rad; GoalOutcome's names)."""
 
 
@@ -280,6 +284,38 @@ def _errands(args: argparse.Namespace) -> int:
     else:
         print(errands_table(results))
     return 0
+
+
+def _dashboard(args: argparse.Namespace) -> int:
+    """Serve the rider's dashboard on the simulated chair as a page of its own (Voila),
+    in the foreground until Ctrl-C."""
+    from abcwc.sim.world import load_world
+    from abcwc.ui.dashboard import VOILA_IP, WORLD_VARIABLE, voila_command
+
+    command = voila_command(args.port, open_browser=not args.no_browser)
+    world = load_world(args.world)  # an unknown world is refused before any server starts
+    given = Path(args.world)
+    # a world file by its full path: the page's kernel runs in the notebook's folder
+    named = str(given.resolve()) if given.suffix == ".json" or given.exists() else args.world
+    print(f"the rider's dashboard on the {world.name} world: http://{VOILA_IP}:{args.port}/ "
+          f"(Ctrl-C stops it)", flush=True)
+    return _serve(command, {**os.environ, WORLD_VARIABLE: named})
+
+
+def _serve(command: list[str], env: dict[str, str]) -> int:
+    """Run a server in the foreground until it ends; on Ctrl-C ask it to stop (SIGTERM:
+    a Jupyter server then shuts its kernels down) and wait 10 s for it; its exit
+    status."""
+    with subprocess.Popen(command, env=env) as server:
+        try:
+            return server.wait()
+        except KeyboardInterrupt:
+            server.terminate()
+            try:
+                server.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                server.kill()
+            return 0
 
 
 def _course_build(args: argparse.Namespace) -> int:
@@ -406,6 +442,16 @@ def build_parser() -> argparse.ArgumentParser:
     errands.add_argument("--world", default="floor", help="a world's name or a .json file")
     _json_option(errands)
     errands.set_defaults(run=_errands)
+
+    dashboard = commands.add_parser(
+        "dashboard", help="serve the rider's dashboard on the simulated chair as a page "
+                          "(Voila) until Ctrl-C", parents=common)
+    dashboard.add_argument("--world", default="lab", help="a world's name or a .json file")
+    dashboard.add_argument("--port", type=int, default=8866,
+                           help="the page's port on 127.0.0.1 (default: 8866)")
+    dashboard.add_argument("--no-browser", action="store_true",
+                           help="do not open the page in a browser")
+    dashboard.set_defaults(run=_dashboard)
     return parser
 
 

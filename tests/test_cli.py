@@ -92,13 +92,13 @@ def test_version_is_the_packages():
 
 def test_every_command_takes_quiet_and_debug_and_the_figures_ones_json():
     minimal = {"demo": [], "bench": [], "course build": [], "posegraph": ["g.g2o"],
-               "slam": ["log.clf"], "navtrial": [], "errands": []}
+               "slam": ["log.clf"], "navtrial": [], "errands": [], "dashboard": []}
     parser = build_parser()
     for command, needed in minimal.items():
         args = parser.parse_args([*command.split(), *needed, "--quiet", "--debug"])
         assert args.quiet and args.debug, command
         assert not parser.parse_args([*command.split(), *needed]).quiet, command
-        if command != "course build":
+        if command not in ("course build", "dashboard"):  # they print no figures
             assert parser.parse_args([*command.split(), *needed, "--json"]).json, command
     # before the command too
     assert parser.parse_args(["--quiet", "--debug", "demo"]).debug
@@ -161,9 +161,14 @@ def test_navtrial_json_has_the_trials_figures(monkeypatch, capsys):
 
     outcome = navigation_trial.GoalOutcome(
         Pose2D(1.0, 2.0, 0.5), "failed", "blocked", 12.5, 3.0, 2.5, 2.75, 0.4, 0.1, 1, 2,
-        math.inf, 0.05, 0.25, {"driving": 12.5})
+        math.inf, 0.05, 0.25, {"driving": 12.5},
+        recoveries={"backing off": 2, "closing the gap ahead": 1})
     trial = navigation_trial.TrialResult([outcome], tolerance=0.25)
     monkeypatch.setattr(navigation_trial, "run_trial", lambda **options: trial)
+    assert main(["navtrial", "--goals", "1", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "recoveries: backing off 2 (1 goals), closing the gap ahead 1 (1 goals)" in text
+    assert "goal 0 (1.0, 2.0) not reached: blocked" in text
     assert main(["navtrial", "--goals", "1", "--json"]) == 0
     figures = json.loads(capsys.readouterr().out)
     assert figures["goals"] == 1 and figures["success_rate"] == 0.0
@@ -173,6 +178,53 @@ def test_navtrial_json_has_the_trials_figures(monkeypatch, capsys):
     assert goal["goal"] == [1.0, 2.0, 0.5] and goal["reason"] == "blocked"
     assert goal["reached"] is False and goal["driven"] == 3.0
     assert goal["phases"] == {"driving": 12.5}
+    assert goal["recoveries"] == {"backing off": 2, "closing the gap ahead": 1}
+
+
+def test_dashboard_serves_the_packages_notebook_with_voila(monkeypatch, tmp_path, capsys):
+    """The command Voila is run with, captured instead of run: the notebook inside the
+    package, this machine only, the culling that releases a closed page's kernel, and the
+    world for the notebook's kernel in its environment (a world file by its full path)."""
+    import nbformat
+
+    from abcwc import cli
+
+    served = []
+    monkeypatch.setattr(cli, "_serve", lambda command, env: served.append((command, env))
+                        or 0)
+    notebook = ROOT / "abcwc" / "ui" / "dashboard.ipynb"
+    assert main(["dashboard", "--world", "floor", "--port", "8123", "--no-browser"]) == 0
+    command, env = served[-1]
+    assert command == [sys.executable, "-m", "voila", str(notebook), "--port=8123",
+                       "--Voila.ip=127.0.0.1", "--MappingKernelManager.cull_interval=5",
+                       "--MappingKernelManager.cull_idle_timeout=10", "--no-browser"]
+    assert env["ABCWC_DASHBOARD_WORLD"] == "floor" and env["PATH"] == os.environ["PATH"]
+    assert "http://127.0.0.1:8123/" in capsys.readouterr().out
+    # the notebook builds its dashboard in the world the environment names
+    code = nbformat.read(notebook, as_version=4).cells[-1].source
+    assert "os.environ.get(WORLD_VARIABLE" in code and code.splitlines()[-1].startswith(
+        "Dashboard(")
+    # by default the page opens in a browser, on Voila's usual port
+    monkeypatch.chdir(tmp_path)
+    world = tmp_path / "mine.json"
+    world.write_text((ROOT / "data" / "worlds" / "lab.json").read_text())
+    assert main(["dashboard", "--world", "mine.json"]) == 0
+    command, env = served[-1]
+    assert "--port=8866" in command and "--no-browser" not in command
+    assert env["ABCWC_DASHBOARD_WORLD"] == str(world)
+
+
+def test_dashboard_refuses_a_bad_port_or_world_before_serving(monkeypatch, capsys):
+    from abcwc import cli
+
+    served = []
+    monkeypatch.setattr(cli, "_serve", lambda command, env: served.append(command) or 0)
+    assert main(["dashboard", "--port", "70000"]) == 2
+    assert capsys.readouterr().err == ("abcwc: error: the port must be a whole number "
+                                       "1..65535, got 70000\n")
+    assert main(["dashboard", "--world", "moon"]) == 2
+    assert "unknown world 'moon'" in capsys.readouterr().err
+    assert served == []
 
 
 def test_an_unexpected_error_is_one_line_calling_it_a_bug(monkeypatch, capsys):

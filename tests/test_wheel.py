@@ -56,6 +56,7 @@ def test_wheel_ships_data_inside_the_package(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     assert DATA_FILES and {f"abcwc/{name}" for name in DATA_FILES} <= names
     assert "abcwc/paths.py" in names and "abcwc/py.typed" in names
+    assert "abcwc/ui/dashboard.ipynb" in names  # abcwc dashboard's page
     assert not any(name.startswith(("data/", "tests/", "solutions/")) for name in names)
     assert "abcwc/data/slam/fr079.clf.gz" in names  # the largest file, 2.2 MB
     # the SLAM data is 4.8 MB of it; the code, worlds and parameters 0.4 MB

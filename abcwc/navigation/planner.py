@@ -22,6 +22,10 @@ grids.
 
 :func:`smooth` then shortens the cell path by cutting corners where the straight line
 between two path cells crosses no costlier cells than the path itself did.
+
+:func:`costs_to_goal` runs the same moves from the goal until every cell is settled
+(Dijkstra, :func:`dijkstra_costs`): each cell's least cost to the goal, the measure the
+navigator's progress check reads, which does not change when the plan does.
 """
 
 from __future__ import annotations
@@ -139,6 +143,49 @@ def astar_search(weights: np.ndarray, start: int, goal: int,
                                            + (math.sqrt(2.0) - 1.0) * min(across, along))
                     heapq.heappush(queue, (new_cost + heuristic, new_cost, nxt))
     return np.inf, came_from
+
+
+@numba.njit(cache=True)
+def dijkstra_costs(weights: np.ndarray, source: int) -> np.ndarray:
+    """(height, width): the least cost from every cell to cell ``source`` (flat index)
+    over the 8-connected grid of ``weights``, the same moves and costs as
+    :func:`astar_search` (Dijkstra 1959: A* with no heuristic, run until the queue is
+    empty); ``inf`` where no way leads. A move's cost does not depend on its direction,
+    so this is also every cell's cost *to* ``source``: the navigation function a
+    progress check reads."""
+    height, width = weights.shape
+    flat = weights.ravel()
+    best = np.full(height * width, np.inf)
+    best[source] = 0.0
+    queue = [(0.0, source)]
+    while queue:
+        cost, cell = heapq.heappop(queue)
+        if cost > best[cell]:
+            continue
+        row, col = cell // width, cell % width
+        for d_row in range(-1, 2):
+            for d_col in range(-1, 2):
+                next_row, next_col = row + d_row, col + d_col
+                if ((d_row == 0 and d_col == 0) or not 0 <= next_row < height
+                        or not 0 <= next_col < width):
+                    continue
+                nxt = next_row * width + next_col
+                length = math.sqrt(2.0) if d_row != 0 and d_col != 0 else 1.0
+                new_cost = cost + length * (flat[cell] + flat[nxt]) / 2
+                if new_cost < best[nxt]:
+                    best[nxt] = new_cost
+                    heapq.heappush(queue, (new_cost, nxt))
+    return best.reshape(height, width)
+
+
+def costs_to_goal(costmap: Costmap, goal: object) -> np.ndarray:
+    """(height, width) every cell's least path cost to ``goal`` (a map point) in free
+    floor metres (the cost over ``COST_NEUTRAL`` per cell, times the resolution: a
+    free straight metre counts 1); ``inf`` where no way leads."""
+    weights = cell_weights(costmap)
+    row, col = _endpoint(costmap, weights, goal, "goal")
+    costs = dijkstra_costs(weights, row * costmap.width + col)
+    return costs * (costmap.resolution / COST_NEUTRAL)
 
 
 def plan(costmap: Costmap, start: object, goal: object, **weight_options: object) -> Path:

@@ -1,3 +1,3 @@
-"""Notebook panels (ipywidgets): the keyboard teleop panel
-(:class:`abcwc.ui.teleop.TeleopPanel`) and the navigator's click-the-map panel
-(:class:`abcwc.ui.navigator_panel.NavigatorPanel`)."""
+"""Notebook panels (ipywidgets): the rider's dashboard (:class:`abcwc.ui.dashboard.Dashboard`:
+destinations, commands, a click on the map, stop; live) and the keyboard teleop panel
+(:class:`abcwc.ui.teleop.TeleopPanel`)."""

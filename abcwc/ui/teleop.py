@@ -14,6 +14,10 @@ In a notebook::
 Clicking a button, or typing a key in the text box, sends the command and runs the
 chair for ``hold`` seconds, redrawing the plot as it goes. Between presses the
 simulator waits; on the real chair the watchdog stops it 250 ms after the last command.
+
+The plot is an image of ``size`` CSS pixels (600 x 400 by default) shown at exactly that
+size and rendered at the screen's device pixel ratio (which the browser hook of
+:mod:`abcwc.ui.access` reports), so it is sharp rather than stretched.
 """
 
 from __future__ import annotations
@@ -68,8 +72,11 @@ class TeleopPanel:
     """
 
     def __init__(self, chair: object, speed: float = 0.5, hold: float = 0.5,
-                 refresh_steps: int = 25, world: object = None, view: float | None = None):
+                 refresh_steps: int = 25, world: object = None, view: float | None = None,
+                 size: tuple[int, int] = (600, 400)):
         import ipywidgets as widgets
+
+        from abcwc.ui.access import FrontEnd
 
         speed = require_finite("speed", speed)
         if not 0.1 <= speed <= 1.0:
@@ -96,7 +103,16 @@ class TeleopPanel:
         self.keybox.observe(self._on_typed, names="value")
         self.buttons = {key: self._button(widgets, key) for key in ("w", "a", "s", "d", " ")}
         self.status = widgets.Label(value="ready: press a key")
-        self.image = widgets.Image(format="png")
+        if not (isinstance(size, tuple) and len(size) == 2
+                and all(isinstance(v, int) and not isinstance(v, bool) and v >= 200
+                        for v in size)):
+            raise ValueError(f"size must be (width, height) in whole CSS px >= 200, "
+                             f"got {size!r}")
+        self.size = size
+        self.image = widgets.Image(format="png", layout=widgets.Layout(
+            width=f"{size[0]}px", height=f"{size[1]}px", flex="0 0 auto"))
+        self.front_end = FrontEnd()
+        self.front_end.observe(self._on_pixel_ratio, names="pixel_ratio")
         self._figure, self._draw_chair, self._draw_trail = self._build_plot()
         self.redraw()
         pad = widgets.Layout(width="60px")
@@ -107,7 +123,7 @@ class TeleopPanel:
         ])
         self.widget = widgets.VBox([
             widgets.HBox([keys, widgets.VBox([self.speed, self.keybox, self.status])]),
-            self.image,
+            self.image, self.front_end,
         ])
 
     # ----------------------------------------------------------------- widgets
@@ -171,12 +187,13 @@ class TeleopPanel:
     # ----------------------------------------------------------------- plotting
     def _build_plot(self) -> tuple:
         """A figure outside pyplot (so nothing shows twice) with the world drawn once."""
-        from matplotlib.figure import Figure
         from matplotlib.patches import Circle
 
+        from abcwc.ui.map_view import figure_for
         from abcwc.viz.scene import ChairArtist, plot_world
 
-        fig = Figure(figsize=(6.0, 4.0), dpi=80, layout="constrained")
+        fig = figure_for(*self.size, pixel_ratio=1.0)
+        fig.set_layout_engine("constrained")
         ax = fig.add_subplot()
         if self.world is not None:
             plot_world(self.world, ax)
@@ -189,6 +206,15 @@ class TeleopPanel:
                                             edgecolor="tab:brown"))
                         for w in getattr(self.chair, "walkers", [])]
         return fig, ChairArtist(ax, self.params), trail
+
+    def _on_pixel_ratio(self, change: dict) -> None:
+        """Render at the browser's device pixel ratio (image px per CSS px)."""
+        from abcwc.ui.map_view import CSS_DPI
+
+        ratio = float(change["new"])
+        if math.isfinite(ratio) and 0.5 <= ratio <= 4:
+            self._figure.set_dpi(CSS_DPI * ratio)
+            self.redraw()
 
     def redraw(self) -> None:
         """Move the chair and trail on the plot and refresh the image."""
@@ -209,7 +235,7 @@ class TeleopPanel:
         else:
             ax.set_title("no ground-truth pose from this chair")
         buffer = io.BytesIO()
-        self._figure.savefig(buffer, format="png")
+        self._figure.savefig(buffer, format="png", dpi=self._figure.dpi)
         self.image.value = buffer.getvalue()
 
     def _follow(self, ax: object, pose: np.ndarray) -> None:

@@ -82,6 +82,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from abcwc.behaviours.mission import Mission, MissionState
+from abcwc.geometry import wrap_angle
 from abcwc.perception.speech.commands import SpokenCommand
 from abcwc.types import Pose2D
 from abcwc.ui.access import DwellSelector, FrontEnd, SwitchScanner
@@ -452,7 +453,7 @@ class Dashboard:
         now = self._track[-1]
         recent = [row for row in self._track if row[0] >= now[0] - STILL_WINDOW]
         first = recent[0]
-        turn = abs(math.remainder(now[3] - first[3], math.tau))
+        turn = abs(wrap_angle(now[3] - first[3]))
         return math.hypot(now[1] - first[1], now[2] - first[2]) < STILL_DISTANCE \
             and turn < STILL_TURN
 

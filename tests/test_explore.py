@@ -13,8 +13,6 @@ import time
 import numpy as np
 import pytest
 from scipy import ndimage
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from abcwc.behaviours.base import Status
 from abcwc.behaviours.explore import (
@@ -23,7 +21,6 @@ from abcwc.behaviours.explore import (
     floor_map,
     frontier_cells,
     run_exploration,
-    travel_costs,
 )
 from abcwc.behaviours.navigator import Navigator
 from abcwc.experiments.navigation_trial import calibrated_ekf
@@ -206,29 +203,6 @@ def test_frontier_cells_are_open_cells_beside_a_large_unknown_region():
     assert np.array_equal(frontier, expected)
     # the gap counts when it is as large as asked
     assert frontier_cells(log_odds, min_unknown=9)[4, 6]
-
-
-def test_travel_costs_are_the_least_costs_dijkstra_finds():
-    rng = np.random.default_rng(24)
-    weights = rng.uniform(50.0, 250.0, (12, 15))
-    weights[rng.random(weights.shape) < 0.15] = np.inf
-    weights[0, 0] = 50.0
-    height, width = weights.shape
-    rows, cols, costs = [], [], []
-    for r in range(height):
-        for c in range(width):
-            for dr in (-1, 0, 1):
-                for dc in (-1, 0, 1):
-                    rr, cc = r + dr, c + dc
-                    if (dr or dc) and 0 <= rr < height and 0 <= cc < width:
-                        step = math.hypot(dr, dc) * (weights[r, c] + weights[rr, cc]) / 2
-                        if math.isfinite(step):
-                            rows.append(r * width + c)
-                            cols.append(rr * width + cc)
-                            costs.append(step)
-    graph = coo_matrix((costs, (rows, cols)), shape=(height * width,) * 2).tocsr()
-    expected = dijkstra(graph, indices=0)
-    assert np.allclose(travel_costs(weights, 0), expected)
 
 
 def test_bad_input_is_refused_with_what_is_allowed(tmp_path):

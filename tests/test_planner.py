@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 import pytest
-from scipy.sparse import lil_matrix
-from scipy.sparse.csgraph import shortest_path
+from scipy.sparse import coo_matrix, lil_matrix
+from scipy.sparse.csgraph import dijkstra, shortest_path
 
 from abcwc.navigation.costmap import FREE_SPACE, INSCRIBED, LETHAL, NO_INFORMATION, Costmap
 from abcwc.navigation.planner import (
@@ -15,6 +15,7 @@ from abcwc.navigation.planner import (
     astar_search,
     cell_weights,
     costs_to_goal,
+    dijkstra_costs,
     plan,
     smooth,
 )
@@ -156,3 +157,26 @@ def test_costs_to_goal_are_each_cells_least_plan_cost():
             expected = np.inf
         assert costs[row, col] == pytest.approx(expected, rel=1e-9)
     assert np.isinf(costs[27, 35])  # behind the corner's walls
+
+
+def test_dijkstra_costs_are_the_least_costs_scipys_dijkstra_finds():
+    rng = np.random.default_rng(24)
+    weights = rng.uniform(50.0, 250.0, (12, 15))
+    weights[rng.random(weights.shape) < 0.15] = np.inf
+    weights[0, 0] = 50.0
+    height, width = weights.shape
+    rows, cols, costs = [], [], []
+    for r in range(height):
+        for c in range(width):
+            for dr in (-1, 0, 1):
+                for dc in (-1, 0, 1):
+                    rr, cc = r + dr, c + dc
+                    if (dr or dc) and 0 <= rr < height and 0 <= cc < width:
+                        step = math.hypot(dr, dc) * (weights[r, c] + weights[rr, cc]) / 2
+                        if math.isfinite(step):
+                            rows.append(r * width + c)
+                            cols.append(rr * width + cc)
+                            costs.append(step)
+    graph = coo_matrix((costs, (rows, cols)), shape=(height * width,) * 2).tocsr()
+    expected = dijkstra(graph, indices=0)
+    assert np.allclose(dijkstra_costs(weights, 0).ravel(), expected)

@@ -21,7 +21,8 @@ Where it goes:
   m^2 (:func:`frontier_cells`); 8-connected frontier cells form a frontier, and a
   frontier at least ``min_frontier`` m long is worth a visit.
   The chair drives to the nearest one by travel cost over the inflated costmap (a
-  Dijkstra search from the chair, :func:`travel_costs`), to its cell nearest the chair;
+  Dijkstra search from the chair, :func:`~abcwc.navigation.planner.dijkstra_costs`), to
+  its cell nearest the chair;
   when that frontier has been seen (none of its cells is a frontier any more within
   ``frontier_reach`` m of the goal) it picks the next. A frontier the navigator failed to
   reach is not tried again. A frontier goal keeps ``turn_margin`` m more than the
@@ -39,7 +40,6 @@ or loads the saved map of a floor the chair already knows.
 
 from __future__ import annotations
 
-import heapq
 import math
 import time
 from collections.abc import Sequence
@@ -47,7 +47,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numba
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
@@ -69,7 +68,7 @@ from abcwc.mapping.grid import (
 )
 from abcwc.navigation.costmap import FREE_SPACE, INSCRIBED, LETHAL, Costmap
 from abcwc.navigation.localization import MapLocalizer, occupied_points
-from abcwc.navigation.planner import cell_weights
+from abcwc.navigation.planner import cell_weights, dijkstra_costs
 from abcwc.params import ChairParams, default_params
 from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame, Twist
 
@@ -431,7 +430,7 @@ class Explorer(BehaviourBase):
         start = int(rows[0]) * costmap.width + int(cols[0])
         if not math.isfinite(weights.flat[start]):  # the estimate against a wall
             weights.flat[start] = float(weights[np.isfinite(weights)].max())
-        costs = travel_costs(weights, start).reshape(costmap.shape)
+        costs = dijkstra_costs(weights, start)
         best: tuple[float, tuple[float, float]] | None = None
         for points in found:
             if any(np.hypot(*(points - failed).T).min() <= self.settings.frontier_reach
@@ -472,37 +471,6 @@ def _static(cells: np.ndarray, geometry: Costmap) -> Costmap:
     static = Costmap.like(geometry, default=FREE_SPACE)
     static.add_static(cells, track_unknown=False)
     return static
-
-
-@numba.njit(cache=True)
-def travel_costs(weights: np.ndarray, start: int) -> np.ndarray:
-    """Dijkstra's least cost from cell ``start`` (flat index) to every cell of the
-    8-connected grid of ``weights`` (the planner's :func:`~abcwc.navigation.planner.
-    cell_weights`; a move costs its length in cells times the mean of the two weights,
-    as the planner's does), flat; ``inf`` where no way leads."""
-    height, width = weights.shape
-    flat = weights.ravel()
-    best = np.full(height * width, np.inf)
-    best[start] = 0.0
-    queue = [(0.0, start)]
-    while queue:
-        cost, cell = heapq.heappop(queue)
-        if cost > best[cell]:
-            continue
-        row, col = cell // width, cell % width
-        for d_row in range(-1, 2):
-            for d_col in range(-1, 2):
-                next_row, next_col = row + d_row, col + d_col
-                if ((d_row == 0 and d_col == 0) or not 0 <= next_row < height
-                        or not 0 <= next_col < width):
-                    continue
-                nxt = next_row * width + next_col
-                length = math.sqrt(2.0) if d_row != 0 and d_col != 0 else 1.0
-                new_cost = cost + length * (flat[cell] + flat[nxt]) / 2
-                if new_cost < best[nxt]:
-                    best[nxt] = new_cost
-                    heapq.heappush(queue, (new_cost, nxt))
-    return best
 
 
 def run_exploration(chair: Base, explorer: Explorer, max_seconds: float,

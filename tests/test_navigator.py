@@ -337,3 +337,29 @@ def test_avoided_cells_are_walls_until_the_next_goal():
         navigator.avoid(np.zeros((3, 3), dtype=bool))
     navigator.go_to((14.0, 9.0, 0.0))
     assert (navigator.global_costmap.cost == before).all() and not navigator.avoided.any()
+
+
+def test_on_a_finished_map_no_plan_crosses_unknown_cells():
+    """A built map's unknown cells are a wall's shadow or the outside, never a way: a
+    room whose only opening is unknown has no path in (the navigator fails at once,
+    saying so), where a map that is still growing may plan through it."""
+    from abcwc.mapping.grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+    from abcwc.navigation.costmap import Costmap
+    from abcwc.navigation.localization import MapLocalizer, occupied_points
+
+    cells = np.full((80, 120), FREE, dtype=np.int8)
+    cells[[0, -1], :] = OCCUPIED
+    cells[:, [0, -1]] = OCCUPIED
+    cells[:, 60] = OCCUPIED  # a wall across the room
+    cells[30:50, 58:63] = UNKNOWN  # a stretch of it never seen
+    grid = OccupancyGrid.from_trinary(cells, 0.05, (0.0, 0.0, 0.0))
+    start, goal = Pose2D(1.0, 2.0, 0.0), (5.0, 2.0)
+    finished = Navigator.for_map(cells, grid, start)
+    assert not finished.allow_unknown
+    finished.go_to(goal)
+    assert finished.status is Status.FAILED and "no path" in finished.failure
+    growing = Costmap.like(grid)
+    growing.add_static(cells)
+    still_mapping = Navigator(growing, MapLocalizer(occupied_points(cells, grid), start))
+    still_mapping.go_to(goal)
+    assert still_mapping.running and still_mapping.path is not None

@@ -95,18 +95,22 @@ def _as_path(costmap: Costmap, cells: list[tuple[int, int]], cost: float) -> Pat
 
 
 @numba.njit(cache=True)
-def astar_search(weights: np.ndarray, start: int, goal: int,
-                 neutral: float) -> tuple[float, np.ndarray]:
+def least_costs(weights: np.ndarray, start: int, goal: int,
+                neutral: float) -> tuple[np.ndarray, np.ndarray]:
     """A* over the 8-connected grid of ``weights`` (Hart, Nilsson and Raphael 1968), from
-    cell ``start`` to cell ``goal`` (flat indices ``row * width + col``).
+    cell ``start`` towards cell ``goal`` (flat indices ``row * width + col``); with no
+    goal (-1) and ``neutral`` 0 it is Dijkstra's search (1959), run until the queue is
+    empty.
 
-    Returns the least cost and ``came_from`` (for each cell the cell it was reached from,
-    -1 where none); the cost is ``inf`` when the goal cannot be reached. The heuristic is
-    the octile distance times ``neutral``, the cheapest weight: never more than the true
-    cost and consistent, so a cell's cost is final the first time it leaves the queue.
+    A move to a neighbour costs its length in cells times the mean of the two cells'
+    weights (inf: impassable). The heuristic is the octile distance times ``neutral``,
+    the cheapest weight: never more than the true cost and consistent, so a cell's cost
+    is final the first time it leaves the queue. Returns ``best`` (each cell's least
+    cost found, flat; final for the goal and every cell settled before it) and
+    ``came_from`` (for each cell the cell it was reached from, -1 where none).
 
-    Compiled by numba (about 30 ms across 500 x 500 cells); ``astar_search.py_func`` is
-    the same code run by Python, for reading and stepping through on small grids.
+    Compiled by numba; ``least_costs.py_func`` is the same code run by Python, for
+    reading and stepping through on small grids.
     """
     height, width = weights.shape
     flat = weights.ravel()
@@ -118,7 +122,7 @@ def astar_search(weights: np.ndarray, start: int, goal: int,
     while queue:
         _, cost, cell = heapq.heappop(queue)
         if cell == goal:
-            return cost, came_from
+            break
         if cost > best[cell]:
             continue  # a cheaper way here was found after this entry was queued
         row, col = cell // width, cell % width
@@ -138,40 +142,27 @@ def astar_search(weights: np.ndarray, start: int, goal: int,
                     heuristic = neutral * (max(across, along)
                                            + (math.sqrt(2.0) - 1.0) * min(across, along))
                     heapq.heappush(queue, (new_cost + heuristic, new_cost, nxt))
-    return np.inf, came_from
+    return best, came_from
 
 
 @numba.njit(cache=True)
+def astar_search(weights: np.ndarray, start: int, goal: int,
+                 neutral: float) -> tuple[float, np.ndarray]:
+    """A* from cell ``start`` to cell ``goal`` (:func:`least_costs`): the least cost
+    (``inf`` when the goal cannot be reached) and ``came_from``. About 30 ms across
+    500 x 500 cells."""
+    best, came_from = least_costs(weights, start, goal, neutral)
+    return best[goal], came_from
+
+
 def dijkstra_costs(weights: np.ndarray, source: int) -> np.ndarray:
     """(height, width): the least cost from every cell to cell ``source`` (flat index)
     over the 8-connected grid of ``weights``, the same moves and costs as
-    :func:`astar_search` (Dijkstra 1959: A* with no heuristic, run until the queue is
-    empty); ``inf`` where no way leads. A move's cost does not depend on its direction,
-    so this is also every cell's cost *to* ``source``: the navigation function a
-    progress check reads."""
-    height, width = weights.shape
-    flat = weights.ravel()
-    best = np.full(height * width, np.inf)
-    best[source] = 0.0
-    queue = [(0.0, source)]
-    while queue:
-        cost, cell = heapq.heappop(queue)
-        if cost > best[cell]:
-            continue
-        row, col = cell // width, cell % width
-        for d_row in range(-1, 2):
-            for d_col in range(-1, 2):
-                next_row, next_col = row + d_row, col + d_col
-                if ((d_row == 0 and d_col == 0) or not 0 <= next_row < height
-                        or not 0 <= next_col < width):
-                    continue
-                nxt = next_row * width + next_col
-                length = math.sqrt(2.0) if d_row != 0 and d_col != 0 else 1.0
-                new_cost = cost + length * (flat[cell] + flat[nxt]) / 2
-                if new_cost < best[nxt]:
-                    best[nxt] = new_cost
-                    heapq.heappush(queue, (new_cost, nxt))
-    return best.reshape(height, width)
+    :func:`astar_search` (:func:`least_costs` with no goal and no heuristic: Dijkstra's
+    search); ``inf`` where no way leads. A move's cost does not depend on its direction,
+    so this is also every cell's cost *to* ``source``."""
+    best, _ = least_costs(weights, source, -1, 0.0)
+    return best.reshape(weights.shape)
 
 
 def plan(costmap: Costmap, start: object, goal: object, **weight_options: object) -> Path:

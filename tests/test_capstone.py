@@ -24,10 +24,10 @@ from abcwc.mapping.map_io import load_map
 from abcwc.perception.speech.synthesis import espeak_available
 from abcwc.sim.world import load_world, world_from_dict
 from abcwc.types import Pose2D
+from abcwc.viz.mission import plot_timeline
 from abcwc.viz.report import (
     figure_png,
     plot_map_and_route,
-    plot_mission_states,
     write_html_report,
 )
 
@@ -158,7 +158,7 @@ def test_the_report_page_holds_what_it_was_given(tmp_path):
     map_png = figure_png(plot_map_and_route(grid, track, track + 0.02,
                                             {"desk": Pose2D(5, 2, 0)},
                                             [(3.0, "lift requested", 5.0, 2.0)]).figure)
-    states_png = figure_png(plot_mission_states(
+    states_png = figure_png(plot_timeline(
         [(0.0, 2.0, "navigating"), (2.0, 2.5, "manual override"), (2.5, 4, "idle")],
         [(3.0, "lift requested", 5.0, 2.0)]).figure)
     page = write_html_report(tmp_path / "r.html", "An <errand>", "it went", [

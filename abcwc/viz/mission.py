@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from matplotlib.axes import Axes
 from matplotlib.patches import Rectangle
@@ -111,15 +111,21 @@ def _arrow(ax: Axes, start: tuple[float, float], end: tuple[float, float], names
                                     "ec": "none", "alpha": 0.85})
 
 
-def plot_timeline(timeline: list[tuple[float, float, str]], ax: Axes | None = None) -> Axes:
+def plot_timeline(timeline: list[tuple[float, float, str]],
+                  events: Sequence[tuple[float, str, float, float]] = (),
+                  ax: Axes | None = None) -> Axes:
     """The mission's states over a run (:func:`~abcwc.behaviours.mission.mission_timeline`)
-    as bars along the time axis, one row per state."""
+    as bars along the time axis, one row per state, and the ``events`` (t s, name, x m,
+    y m; an errand's) as marked lines across them."""
     ax = new_axes(ax, (10.0, 2.8))
     rows = {state.value: k for k, state in enumerate(MissionState)}
     colours = dict(zip(rows, ("0.6", "tab:blue", "tab:orange", "tab:purple", "gold",
                               "tab:red", "tab:green", "black")))
     for start, end, state in timeline:
         ax.barh(rows[state], end - start, left=start, height=0.6, color=colours[state])
+    for t, name, _, _ in events:
+        ax.axvline(t, color="#d81b60", linewidth=1.2)
+        ax.annotate(name, (t, -0.6), fontsize=8, color="#d81b60", annotation_clip=False)
     ax.set_yticks(list(rows.values()), list(rows))
     ax.invert_yaxis()
     ax.set_xlabel("t (s)")

@@ -27,13 +27,7 @@ from abcwc.mapping.grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 from abcwc.sim.world import World
 from abcwc.types import Pose2D
 from abcwc.viz._common import CHAIR_COLOR, PLACE_COLOR, new_axes
-
-STATE_COLOURS = {
-    "idle": "#bdbdbd", "localising": "#ffb74d", "navigating": "#4caf50",
-    "following": "#26a69a", "waiting": "#fff176", "manual override": "#e53935",
-    "arrived": "#1e88e5", "failed": "#212121", "mapping": "#8e24aa",
-}
-"""The colour of each mission state in the timeline (unknown states are grey)."""
+from abcwc.viz.mission import plot_timeline
 
 ESTIMATE_COLOUR = "#ff9800"
 
@@ -76,30 +70,6 @@ def plot_map_and_route(grid: OccupancyGrid, track: np.ndarray,
                     xytext=(6, -12), fontsize=9, color="#d81b60")
     ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal", xlim=extent[:2], ylim=extent[2:])
     ax.legend(loc="upper right", fontsize=8, framealpha=0.85)
-    return ax
-
-
-def plot_mission_states(timeline: Sequence[tuple[float, float, str]],
-                        events: Sequence[tuple[float, str, float, float]] = (),
-                        ax: Axes | None = None) -> Axes:
-    """The mission's states over time: one coloured bar per (start s, end s, state), the
-    events as marks above it."""
-    ax = new_axes(ax, (10.0, 1.8))
-    seen: dict[str, bool] = {}
-    for start, end, state in timeline:
-        colour = STATE_COLOURS.get(state, "#9e9e9e")
-        ax.broken_barh([(start, max(end - start, 1e-3))], (0, 1), facecolors=colour,
-                       edgecolor="white", linewidth=0.5,
-                       label=None if state in seen else state)
-        seen[state] = True
-    for t, name, _, _ in events:
-        ax.axvline(t, color="#d81b60", linewidth=1.2)
-        ax.annotate(name, (t, 1.05), fontsize=8, color="#d81b60", annotation_clip=False)
-    ax.set(xlabel="time (s)", yticks=[], ylim=(0, 1.3))
-    if timeline:
-        ax.set_xlim(timeline[0][0], timeline[-1][1])
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.45), ncol=max(len(seen), 1),
-              fontsize=8, frameon=False)
     return ax
 
 
@@ -166,7 +136,7 @@ def write_errand_report(result: ErrandResult, grid: OccupancyGrid, out: str | Pa
     timeline = [(start - result.started_at, end - result.started_at, state)
                 for start, end, state in mission_timeline(result.log)
                 ] if result.log is not None else []
-    states_png = figure_png(plot_mission_states(timeline, result.events).figure)
+    states_png = figure_png(plot_timeline(timeline, result.events).figure)
     gif = None
     if animation and result.log is not None:
         from abcwc.viz.animation import animate_run, save_animation
@@ -179,5 +149,5 @@ def write_errand_report(result: ErrandResult, grid: OccupancyGrid, out: str | Pa
                              result.transitions)
 
 
-__all__ = ["STATE_COLOURS", "figure_png", "plot_map_and_route", "plot_mission_states",
+__all__ = ["figure_png", "plot_map_and_route",
            "write_errand_report", "write_html_report"]

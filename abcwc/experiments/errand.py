@@ -32,6 +32,7 @@ import numpy as np
 
 from abcwc.behaviours.explore import MappedFloor, floor_map
 from abcwc.behaviours.mission import Mission, MissionState
+from abcwc.estimation.ekf import ChairEkf
 from abcwc.experiments.navigation_trial import calibrated_ekf, gap_to_people
 from abcwc.geometry import transform_points
 from abcwc.log import RunLog
@@ -240,6 +241,19 @@ def tour_of(world: World, start: Pose2D) -> list[tuple[float, float]]:
     return [*tour, (start.x, start.y)]
 
 
+def mission_on_its_own_map(chair: SimBase, world: World, map_path: Path, ekf: ChairEkf,
+                           progress: bool = False) -> tuple[Mission, MappedFloor]:
+    """``chair`` (at ``world``'s start, its filter ``ekf``) maps the floor by a tour of its
+    places (:func:`tour_of`, :func:`~abcwc.behaviours.explore.floor_map`, the map files
+    at ``map_path``), and the mission that drives by that map, from where the mapping
+    left the chair, to ``world``'s places."""
+    floor = floor_map(chair, map_path, world.start, tour=tour_of(world, world.start),
+                      ekf=ekf, progress=progress)
+    mission = Mission.for_map(floor.built.cells, floor.built.grid, floor.pose,
+                              dict(world.places), chair.params, ekf=floor.ekf)
+    return mission, floor
+
+
 def capstone_errand(world: World, destination: str, seed: int = 0, out: str | Path | None = None,
                     spoken: bool = True, people: bool = True, progress: bool = False,
                     timeout: float = 300.0) -> tuple[ErrandResult, OccupancyGrid, list[str]]:
@@ -254,7 +268,6 @@ def capstone_errand(world: World, destination: str, seed: int = 0, out: str | Pa
 
     wall_start = time.perf_counter()
     chair = SimBase(world, seed=seed, lidar=True, people=people)
-    start = world.start
     ekf = calibrated_ekf(chair)
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(out) if out is not None else Path(scratch)
@@ -263,11 +276,8 @@ def capstone_errand(world: World, destination: str, seed: int = 0, out: str | Pa
         for stale in (map_path, map_path.with_suffix(".pgm")):
             stale.unlink(missing_ok=True)  # the demo maps the floor every time
         mapping_t0, contacts0 = chair.t, chair.collisions
-        floor: MappedFloor = floor_map(chair, map_path, start, tour=tour_of(world, start),
-                                       ekf=ekf, progress=progress)
+        mission, floor = mission_on_its_own_map(chair, world, map_path, ekf, progress)
         mapping_seconds = chair.t - mapping_t0
-        mission = Mission.for_map(floor.built.cells, floor.built.grid, floor.pose,
-                                  dict(world.places), chair.params, ekf=floor.ekf)
         result = run_errand(mission, chair, destination, spoken=spoken, timeout=timeout,
                             progress=progress)
         result.mapping_seconds = mapping_seconds
@@ -299,10 +309,8 @@ def run_errands(count: int = 20, seed: int = 0, world: World | str = "floor",
     chair = SimBase(world, seed=seed, lidar=True, people=True)
     ekf = calibrated_ekf(chair)
     with tempfile.TemporaryDirectory() as scratch:
-        floor = floor_map(chair, Path(scratch) / "map.yaml", world.start,
-                          tour=tour_of(world, world.start), ekf=ekf, progress=progress)
-    mission = Mission.for_map(floor.built.cells, floor.built.grid, floor.pose,
-                              dict(world.places), chair.params, ekf=floor.ekf)
+        mission, _ = mission_on_its_own_map(chair, world, Path(scratch) / "map.yaml", ekf,
+                                            progress)
     rng = np.random.default_rng(seed)
     results: list[ErrandResult] = []
     here: str | None = None
@@ -338,4 +346,5 @@ def errands_table(results: list[ErrandResult]) -> str:
 
 
 __all__ = ["ENDED", "ErrandJudge", "ErrandResult", "capstone_errand", "errand_destination",
-           "errands_table", "run_errand", "run_errands", "spoken_command", "tour_of"]
+           "errands_table", "mission_on_its_own_map", "run_errand", "run_errands",
+           "spoken_command", "tour_of"]

@@ -1,7 +1,9 @@
-"""Shared fixtures: an ideal chair and noise-free parameters."""
+"""Shared fixtures: an ideal chair and noise-free parameters, and the firmware harness
+for simavr (built once a session; under CI a missing toolchain fails, elsewhere it skips)."""
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 
 import pytest
@@ -25,3 +27,19 @@ def noise_free(params: ChairParams | None = None) -> ChairParams:
 @pytest.fixture
 def params() -> ChairParams:
     return default_params()
+
+
+UNDER_CI = os.environ.get("CI", "").lower() == "true"
+
+
+@pytest.fixture(scope="session")
+def harness_files():
+    """The firmware-in-the-loop harness, built (``make``) once for the session."""
+    from abcwc.hw.fil_base import FirmwareToolchainError, build_harness
+
+    try:
+        return build_harness()
+    except FirmwareToolchainError as exc:
+        if UNDER_CI:
+            pytest.fail(str(exc))
+        pytest.skip(str(exc))

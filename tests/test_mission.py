@@ -267,18 +267,6 @@ def test_the_joystick_wins_in_the_simulator():
     _override_and_resume(chair, Mission.for_world(chair.world), "centre")
 
 
-@pytest.fixture(scope="module")
-def harness_files():
-    from abcwc.hw.fil_base import FirmwareToolchainError, build_harness
-
-    try:
-        return build_harness()
-    except FirmwareToolchainError as exc:
-        if UNDER_CI:
-            pytest.fail(str(exc))
-        pytest.skip(str(exc))
-
-
 def test_the_joystick_wins_through_the_firmware_in_the_loop(harness_files):
     """The same errand, with the firmware on a simulated Arduino between the host and
     the chair: its override flag, its pots."""

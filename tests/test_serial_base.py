@@ -28,20 +28,6 @@ from abcwc.sim.motor import ChairErrors
 from abcwc.sim.world import world_from_dict
 from abcwc.types import PotCommand, StatusFlags, Twist
 
-UNDER_CI = os.environ.get("CI", "").lower() == "true"
-
-
-@pytest.fixture(scope="module")
-def harness_files():
-    from abcwc.hw.fil_base import FirmwareToolchainError, build_harness
-
-    try:
-        return build_harness()
-    except FirmwareToolchainError as exc:
-        if UNDER_CI:
-            pytest.fail(str(exc))
-        pytest.skip(str(exc))
-
 
 @pytest.fixture()
 def realtime_chair(harness_files):

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +28,6 @@ from abcwc.sim import SimBase
 from abcwc.sim.world import World, world_from_dict
 from abcwc.types import Pose2D, StatusFlags, Twist
 
-UNDER_CI = os.environ.get("CI", "").lower() == "true"
 ENDED = (MissionState.ARRIVED, MissionState.FAILED)
 
 
@@ -103,23 +101,9 @@ def test_a_button_and_a_map_click_take_the_chair_there():
         == ["button: going to the centre", "map click: going to (8.00, 6.00) m"]
 
 
-def _need_speech_tools() -> None:
-    """Skip locally (fail under CI) without pocketsphinx or Debian's espeak-ng."""
-    from abcwc.perception.speech.synthesis import espeak_available
-
-    try:
-        import pocketsphinx  # noqa: F401
-    except ImportError:
-        missing = "pocketsphinx"
-    else:
-        missing = "" if espeak_available() else "Debian's espeak-ng"
-    if missing:
-        if UNDER_CI:
-            pytest.fail(f"{missing} is needed under CI (.ci/run installs it)")
-        pytest.skip(f"{missing} is not installed")
-
-
 def test_a_spoken_command_is_heard_and_takes_the_chair_there():
+    from tests.test_speech import _need_speech_tools
+
     _need_speech_tools()
     from abcwc.experiments.speech_trials import utterance
     from abcwc.perception.speech.recognizer import CommandRecognizer

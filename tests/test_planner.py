@@ -14,6 +14,7 @@ from abcwc.navigation.planner import (
     NoPathError,
     astar_search,
     cell_weights,
+    costs_to_goal,
     dijkstra_costs,
     plan,
     smooth,
@@ -136,6 +137,28 @@ def test_impossible_goals_say_why():
         plan(costmap, (0.5, 0.5), (2.5, 0.5), allow_unknown=False)
 
 
+def test_costs_to_goal_are_each_cells_least_plan_cost():
+    """The progress check's map: from every cell, the cost A* finds to the goal (in free
+    floor metres), and inf where the goal is walled off."""
+    costmap = Costmap(0.05, 40, 30, default=0)
+    costmap.cost[:, 20] = LETHAL
+    costmap.cost[10:14, 20] = 0  # a door
+    costmap.cost[25:, 30] = LETHAL
+    costmap.cost[25, 30:] = LETHAL  # a walled-off corner
+    costmap.inflate(0.1, 0.4)
+    goal = (1.8, 0.3)
+    costs = costs_to_goal(costmap, goal)
+    rng = np.random.default_rng(3)
+    for row, col in zip(rng.integers(0, 30, 25), rng.integers(0, 40, 25)):
+        start = costmap.cell_to_world(np.array([row]), np.array([col]))[0]
+        try:
+            expected = plan(costmap, start, goal).cost * costmap.resolution / COST_NEUTRAL
+        except NoPathError:
+            expected = np.inf
+        assert costs[row, col] == pytest.approx(expected, rel=1e-9)
+    assert np.isinf(costs[27, 35])  # behind the corner's walls
+
+
 def test_dijkstra_costs_are_the_least_costs_scipys_dijkstra_finds():
     rng = np.random.default_rng(24)
     weights = rng.uniform(50.0, 250.0, (12, 15))
@@ -157,3 +180,14 @@ def test_dijkstra_costs_are_the_least_costs_scipys_dijkstra_finds():
     graph = coo_matrix((costs, (rows, cols)), shape=(height * width,) * 2).tocsr()
     expected = dijkstra(graph, indices=0)
     assert np.allclose(dijkstra_costs(weights, 0).ravel(), expected)
+
+
+def test_an_unknown_cell_weighs_navfns_253():
+    """navfn's setCostmap writes an unknown cell it may cross as COST_OBS - 1 = 253, a
+    weight dearer than any known passable cell (the dearest, cost 252, weighs 251.6)."""
+    costmap = Costmap(0.1, 3, 1, (0.0, 0.0, 0.0))
+    costmap.cost[:] = [[0, INSCRIBED - 1, NO_INFORMATION]]
+    free, dearest, unknown = cell_weights(costmap)[0]
+    assert (free, unknown) == (50.0, 253.0)
+    assert dearest == pytest.approx(50 + 0.8 * 252) and dearest < unknown
+    assert not np.isfinite(cell_weights(costmap, allow_unknown=False)[0, 2])

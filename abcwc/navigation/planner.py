@@ -7,8 +7,9 @@ traversal, Konolige's gradient planner without the interpolation)::
     weight(cell) = neutral + factor * cost(cell)        (navfn: COST_NEUTRAL 50, factor 0.8)
 
 Cells at ``INSCRIBED`` (253) and above are impassable (the chair's centre there puts its
-inscribed circle on an obstacle); unknown cells (255) are crossed at the weight of cost
-252 when ``allow_unknown`` is set (global_planner's ``allow_unknown``), else blocked.
+inscribed circle on an obstacle); unknown cells (255) are crossed at weight 253 (navfn's
+``COST_OBS - 1``, a weight, not a cost: dearer than every known passable cell) when
+``allow_unknown`` is set (global_planner's ``allow_unknown``), else blocked.
 Moves go to the 8 neighbours; a move from cell ``a`` to ``b`` costs its length in cells
 times the mean of the two weights, so a path's cost does not depend on its direction.
 
@@ -22,6 +23,10 @@ grids.
 
 :func:`smooth` then shortens the cell path by cutting corners where the straight line
 between two path cells crosses no costlier cells than the path itself did.
+
+:func:`costs_to_goal` runs the same moves from the goal until every cell is settled
+(Dijkstra, :func:`dijkstra_costs`): each cell's least cost to the goal, the measure the
+navigator's progress check reads, which does not change when the plan does.
 """
 
 from __future__ import annotations
@@ -41,6 +46,9 @@ COST_NEUTRAL = 50.0
 """navfn's cost of crossing a free cell."""
 COST_FACTOR = 0.8
 """navfn's weight per unit of costmap cost."""
+UNKNOWN_WEIGHT = 253.0
+"""navfn's weight of an unknown cell it may cross (``COST_OBS - 1``, navfn.cpp's
+``setCostmap``)."""
 
 class NoPathError(ValueError):
     """There is no way from the start to the goal (or one of them is blocked)."""
@@ -66,10 +74,10 @@ def cell_weights(costmap: Costmap, neutral: float = COST_NEUTRAL, factor: float 
     """(height, width) float: the weight of crossing each cell; ``inf`` where impassable."""
     if not (neutral > 0 and factor >= 0):
         raise ValueError(f"neutral must be > 0 and factor >= 0, got {neutral!r}, {factor!r}")
-    cost = costmap.cost.astype(float)
     unknown = costmap.cost == NO_INFORMATION
-    cost[unknown] = INSCRIBED - 1
-    weights = neutral + factor * cost
+    weights = neutral + factor * costmap.cost.astype(float)
+    # navfn's 253, or the dearest passable cell's weight if other scales make it dearer
+    weights[unknown] = max(UNKNOWN_WEIGHT, neutral + factor * (INSCRIBED - 1))
     blocked = (costmap.cost >= INSCRIBED) & ~unknown
     if not allow_unknown:
         blocked |= unknown
@@ -163,6 +171,16 @@ def dijkstra_costs(weights: np.ndarray, source: int) -> np.ndarray:
     so this is also every cell's cost *to* ``source``."""
     best, _ = least_costs(weights, source, -1, 0.0)
     return best.reshape(weights.shape)
+
+
+def costs_to_goal(costmap: Costmap, goal: object, allow_unknown: bool = True) -> np.ndarray:
+    """(height, width) every cell's least path cost to ``goal`` (a map point) in free
+    floor metres (the cost over ``COST_NEUTRAL`` per cell, times the resolution: a
+    free straight metre counts 1); ``inf`` where no way leads."""
+    weights = cell_weights(costmap, allow_unknown=allow_unknown)
+    row, col = _endpoint(costmap, weights, goal, "goal")
+    costs = dijkstra_costs(weights, row * costmap.width + col)
+    return costs * (costmap.resolution / COST_NEUTRAL)
 
 
 def plan(costmap: Costmap, start: object, goal: object, **weight_options: object) -> Path:

@@ -35,8 +35,11 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
    ``controller_patience`` s for the way to clear (people move), then recovers, in
    order (after Nav2's recovery tree): backs off a little if the IR ring sees the way
    behind clear (else turns on the spot), clears the local costmap's sonar and IR marks,
-   closes the gap ahead and plans round it if the map has a way round, backs off again;
-   after ``max_recoveries`` recoveries without progress it gives up with the reason.
+   lines up with the gap ahead (door mode for it) if the map says the chair fits it and
+   it was entered askew, closes the gap ahead and plans round it if the map has a way
+   round, backs off again; after ``max_recoveries`` recoveries without progress it gives
+   up with the reason. A walker in the way is waited for (``people_patience`` s) before
+   each of these: a way that people shut is no proof that it is too narrow.
 
 It ends **succeeded**, or **failed** with a reason a person can act on: the goal is
 off the map or in a wall, no path leads there, no passable way (naming the gap: "the
@@ -428,10 +431,14 @@ class Navigator(BehaviourBase):
         pruned = ahead[along <= s.forward_prune_distance]
         result = self.dwa.plan(local, pose, self.localizer.velocity, pruned,
                                self.people.moving_discs(), s.people_horizon)
-        if result.evading:
+        no_progress = self._oscillating(frame.t, pose)
+        if result.evading and not no_progress:
             self._phase = "keeping out of a person's way"
             return result.command
-        if not result.stuck and not self._oscillating(frame.t, pose):
+        # evading that gets nowhere for oscillation_timeout s is being stuck, too: a
+        # thing the map lacks (a door frame a self-made map drew short) looks to the
+        # tracker like a person standing, and the chair would keep out of its way for ever
+        if not result.stuck and not no_progress:
             self._blocked_since = None
             self._phase = "driving"
             return self._slowed_for_the_goal(self._regulated(result, pose), pose)
@@ -552,6 +559,7 @@ class Navigator(BehaviourBase):
         self._best_remaining = math.inf  # m to go (_to_go) at the last progress
         self._to_goal: np.ndarray | None = None  # m to go from every cell
         self.doors: list[Gap] = []  # the narrow doors on the plan (door mode)
+        self._lined_up: list[Gap] = []  # gaps a recovery put in door mode, for this goal
         self._anchor: tuple[float, Pose2D] | None = None
         self._phase = "planning"
         self._keep_heading = True
@@ -749,11 +757,17 @@ class Navigator(BehaviourBase):
         narrow = minimum_clear_width(self.passing_radius) + 2 * s.door_margin
         doors = [g for g in gaps_along(self.static_map, path.cells, self._wall_distance,
                                        narrow / 2) if g.width < narrow]
+        for gap in self._lined_up:  # wider on the map, but the chair could not get in
+            if (np.hypot(*(path.points - (gap.x, gap.y)).T).min() < s.door_approach
+                    and not any(_same_gap(gap, door) for door in doors)):
+                doors.append(gap)
+        doors.sort(key=lambda g: int(np.argmin(np.hypot(*(path.points - (g.x, g.y)).T))))
         self.doors = doors
         points = path.points
         for door in doors:
-            centre = np.array([door.x, door.y])
-            unit = np.array([-math.sin(door.across), math.cos(door.across)])
+            across = np.array([math.cos(door.across), math.sin(door.across)])
+            centre = self._centred_in_view(np.array([door.x, door.y]), across)
+            unit = np.array([-across[1], across[0]])
             distance = np.hypot(*(points - centre).T)
             k = int(np.argmin(distance))
             outside = distance > s.door_approach
@@ -774,6 +788,24 @@ class Navigator(BehaviourBase):
             return path
         rows, cols = self.static_map.world_to_cell(points)
         return Path(np.column_stack([rows, cols]), points, path.cost)
+
+    def _centred_in_view(self, centre: np.ndarray, across: np.ndarray,
+                         reach: float = 0.3) -> np.ndarray:
+        """``centre`` moved up to ``reach`` m along ``across`` (a unit vector from one
+        side of a door to the other) to the point farthest from both sides as the local
+        costmap sees them now: a map the chair made itself may place a door's frame a
+        cell or more off (scans graze it), and the lidar sees where it truly is."""
+        local = self.local_costmap
+        if local is None:
+            return centre
+        offsets = np.arange(-reach, reach + local.resolution / 2, local.resolution)
+        points = centre + offsets[:, None] * across
+        rows, cols = local.world_to_cell(points)
+        if not local.contains(rows, cols).all():
+            return centre
+        clearance = ndimage.distance_transform_edt(local.cost != LETHAL)[rows, cols]
+        best = np.flatnonzero(clearance == clearance.max())
+        return points[best[np.argmin(np.abs(offsets[best]))]]
 
     def _free_along(self, costmap: Costmap, centre: np.ndarray, unit: np.ndarray) -> float:
         """m from ``centre`` along ``unit`` (up to ``door_approach``) over cells the
@@ -890,9 +922,18 @@ class Navigator(BehaviourBase):
             self.range_layer = RangeSensorLayer(self.static_map)
             self._next_plan = frame.t
             return Twist(0.0, 0.0)
-        gap = self._gap_ahead(pose) if self._recoveries == 3 else None
-        if gap is not None and self._way_round(gap, pose):
-            # the third: the gap ahead is closed, and the plan goes round it
+        gap = self._gap_ahead(pose) if self._recoveries >= 3 else None
+        if gap is not None and not any(_same_gap(gap, door) for door in self.doors) \
+                and gap.width >= minimum_clear_width(self.passing_radius):
+            # a gap the map says the chair fits, entered askew: line up on its axis
+            # (door mode for it) and try again before giving it up
+            self._used("lining up with the gap")
+            self._lined_up.append(gap)
+            self._replan(pose, frame.t)
+            gap = None
+        elif gap is not None and self._way_round(gap, pose):
+            # the gap ahead (in door mode, and still refused) is closed, and the plan
+            # goes round it
             self._used("closing the gap ahead")
             self._closed.append(gap)
             self._to_goal = None  # measured again on the map with the gap shut
@@ -995,6 +1036,12 @@ def _place(places: dict[str, Pose2D], goal: object) -> Pose2D:
         raise ValueError(f"a goal is a place name, a Pose2D or a finite (x, y) or "
                          f"(x, y, theta) in m and rad, got {goal!r}")
     return Pose2D(*values)
+
+
+def _same_gap(a: Gap, b: Gap, within: float = 0.5) -> bool:
+    """Whether two gaps found on different plans are the same opening (middles within
+    ``within`` m)."""
+    return math.hypot(a.x - b.x, a.y - b.y) < within
 
 
 def _densify(points: np.ndarray, spacing: float) -> np.ndarray:

@@ -176,24 +176,23 @@ def survey():
 @lru_cache(maxsize=1)
 def _survey_maps() -> dict[str, OccupancyGrid]:
     """The survey's scans laid into 0.05 m grids at the EKF's poses and at the true ones."""
-    _, log, poses = survey()
+    world, log, poses = survey()
     maps = {}
     for name, at in (("the EKF", poses), ("true poses", log.pose)):
-        grid = OccupancyGrid.covering(*survey()[0].bounds, 0.05, margin=1.0)
+        grid = OccupancyGrid.covering(*world.bounds, 0.05, margin=1.0)
         integrate_log(grid, log, poses=at)
         maps[name] = grid
     return maps
 
 
-def _scores(name: str, tolerance: int = 1, region_of: str | None = None) -> tuple[float, float]:
+def _scores(name: str, tolerance: int = 1) -> tuple[float, float]:
     """(precision, recall) of the map at ``name``'s poses against the true walls, within
-    ``tolerance`` cells, over the walls near what ``region_of``'s map saw (its own)."""
+    ``tolerance`` cells, over the walls near what that map's own scans saw."""
     from abcwc.mapping.truth import precision_recall, rasterise_walls
 
     world = survey()[0]
-    maps = _survey_maps()
-    grid = maps[name]
-    seen = binary_dilation(maps[region_of or name].known(), iterations=2)
+    grid = _survey_maps()[name]
+    seen = binary_dilation(grid.known(), iterations=2)
     return precision_recall(grid, rasterise_walls(world.walls, grid), tolerance, region=seen)
 
 

@@ -376,6 +376,25 @@ def test_the_librarys_function_is_refused_however_it_is_wrapped(wrapped):
     assert "library_pot" in message or "wrap_angle" in message
 
 
+class LibraryGrid:
+    """Stands in for a class of abcwc's, such as OccupancyGrid."""
+
+    def integrate(self, joystick: int) -> int:
+        return TABLE[joystick]
+
+
+LibraryGrid.__module__ = "abcwc.mapping.grid"
+
+
+def test_a_method_of_abcwcs_named_through_its_class_is_refused():
+    def mine(joystick: int) -> int:
+        return LibraryGrid.integrate(LibraryGrid(), joystick)
+
+    assert refusal(mine, LibraryGrid.integrate) == (
+        "that calls abcwc's own LibraryGrid.integrate: write yours")
+    expect_own(mine, library_pot)  # another exercise's function: this one is the student's
+
+
 def test_a_function_defined_in_abcwc_is_refused_by_its_module_even_in_a_partial(capsys):
     assert refusal(functools.partial(abcwc.geometry.wrap_angle)) == (
         "that is abcwc's own wrap_angle (from abcwc.geometry): write yours")

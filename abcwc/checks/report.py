@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import functools
 import html
+import inspect
 import linecache
 import math
 import os
@@ -340,6 +341,8 @@ def expect_own(fn: Callable[..., Any], *library_fns: Callable[..., Any]) -> None
     if _is_own(bare, library_fns):
         raise NotYet(f"that is abcwc's own {_name(bare)}: write yours")
     own = {id(_unwrapped(other)) for other in library_fns}
+    if not own:
+        return
     for reached in _reached(fn):
         if id(reached) in own:
             raise NotYet(f"that calls abcwc's own {_name(reached)}: write yours")
@@ -403,22 +406,33 @@ def _named_by(fn: types.FunctionType) -> list[Any]:
     found += [cell.cell_contents for cell in fn.__closure__ or ()
               if _has_contents(cell)]
     found += list(fn.__defaults__ or ()) + list((fn.__kwdefaults__ or {}).values())
-    modules = [item for item in found if isinstance(item, types.ModuleType)]
-    seen_modules: set[int] = set()
-    while modules:  # abcwc.slam.biggest_correction: attributes the code names, of modules
-        module = modules.pop()
-        if id(module) in seen_modules:
+    owners = [item for item in found if _is_abcwc_owner(item)]
+    seen_owners: set[int] = set()
+    while owners:  # abcwc.mapping.slam.run_slam, OccupancyGrid.integrate: attributes the
+        owner = owners.pop()  # code names, of abcwc's modules and classes
+        if id(owner) in seen_owners:
             continue
-        seen_modules.add(id(module))
+        seen_owners.add(id(owner))
         for name in names:
-            value = getattr(module, name, None)
-            if value is None:
-                continue
-            if isinstance(value, types.ModuleType):
-                modules.append(value)
-            else:
+            value = inspect.getattr_static(owner, name, None)
+            value = value.__func__ if isinstance(value, (staticmethod, classmethod)) else value
+            if _is_abcwc_owner(value):
+                owners.append(value)
+            elif value is not None and not isinstance(value, types.ModuleType):
                 found.append(value)
     return found
+
+
+def _is_abcwc_owner(item: Any) -> bool:
+    """Whether ``item`` is one of abcwc's modules or classes (whose attributes a student's
+    code may name, as in ``abcwc.mapping.slam.run_slam`` or ``OccupancyGrid.integrate``)."""
+    if isinstance(item, types.ModuleType):
+        name = item.__name__
+    elif isinstance(item, type):
+        name = item.__module__ or ""
+    else:
+        return False
+    return name == "abcwc" or name.startswith("abcwc.")
 
 
 def _has_contents(cell: types.CellType) -> bool:

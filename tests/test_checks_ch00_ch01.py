@@ -114,7 +114,7 @@ def test_table_6(capsys):
 
     def as_printed(direction):
         table = {"left": PotCommand(128, 253), "right": PotCommand(128, 8)}
-        return table.get(direction) or direction_pot_command(direction)
+        return table.get(direction) or table_6(direction)
 
     assert_not_yet(ch01.table_6, as_printed, capsys, "left/right as printed")
     assert_not_yet(ch01.table_6, lambda d: (253, 128), capsys, "PotCommand")
@@ -154,12 +154,12 @@ def test_square_sequence(capsys):
     def turns_right(t):
         if ch01.square_phase(t) == "left":
             return PotCommand(128, 192)
-        return ch01.reference_square_sequence(t)
+        return square(t)
 
     assert_not_yet(ch01.square_sequence, turns_right, capsys, "lr below 126")
-    assert_not_yet(ch01.square_sequence, lambda t: ch01.reference_square_sequence(t - 0.5),
+    assert_not_yet(ch01.square_sequence, lambda t: square(t - 0.5),
                    capsys, "t = 0.01 s")
-    assert_not_yet(ch01.square_sequence, lambda t: ch01.reference_square_sequence(t % 23.5),
+    assert_not_yet(ch01.square_sequence, lambda t: square(t % 23.5),
                    capsys, "should stop")
     assert_not_yet(ch01.square_sequence, lambda t: (168, 128), capsys, "PotCommand")
     assert_not_yet(ch01.square_sequence, not_written, capsys, "not written yet")

@@ -44,6 +44,7 @@ def test_turn_value_not_written(capsys):
 
 
 def library_pots(v: float, w: float) -> PotCommand:
+    """abcwc's own controller behind the exercise's signature: refused, not passed."""
     return twist_to_pot_command(Twist(v, w))
 
 
@@ -62,14 +63,14 @@ def float_pots(v: float, w: float) -> PotCommand:
     return PotCommand(safe(128 + offset(v, p.max_speed)), safe(128 - offset(w, p.max_turn_rate)))
 
 
-@pytest.mark.parametrize("fn", [library_pots, float_pots])
-def test_twist_to_pots_passes_the_inverse_motor_model(fn, capsys):
-    assert_pass(ch02.twist_to_pots_check(fn), capsys)
+def test_twist_to_pots_passes_the_inverse_motor_model(capsys):
+    assert_pass(ch02.twist_to_pots_check(float_pots), capsys)
+    assert_not_yet(ch02.twist_to_pots_check(library_pots), capsys, "abcwc's own")
 
 
 def test_twist_to_pots_off_by_two_is_not_yet(capsys):
     def off(v, w):
-        command = library_pots(v, w)
+        command = float_pots(v, w)
         fb = command.fb + 2 if command.fb > 140 else command.fb
         return PotCommand(min(fb, 253), command.lr)
 
@@ -78,7 +79,7 @@ def test_twist_to_pots_off_by_two_is_not_yet(capsys):
 
 def test_twist_to_pots_without_the_safe_range_is_not_yet(capsys):
     def unclamped(v, w):
-        command = library_pots(v, w)
+        command = float_pots(v, w)
         return PotCommand(3 if command.fb == 8 else command.fb, command.lr)
 
     assert_not_yet(ch02.twist_to_pots_check(unclamped), capsys, "gave 3, expected 8")
@@ -86,7 +87,7 @@ def test_twist_to_pots_without_the_safe_range_is_not_yet(capsys):
 
 def test_twist_to_pots_with_left_and_right_swapped_is_not_yet(capsys):
     def swapped(v, w):
-        return library_pots(v, -w)
+        return float_pots(v, -w)
 
     assert_not_yet(ch02.twist_to_pots_check(swapped), capsys, "left turn is LR below 128")
 

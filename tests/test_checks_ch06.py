@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from abcwc.checks import ch06
-from abcwc.estimation import integrate_odometry
 from abcwc.types import Pose2D
 from tests.check_helpers import assert_not_yet, assert_pass, not_written
 
@@ -95,8 +94,13 @@ def test_odometry_step_without_wrap_is_not_yet(capsys):
 
 
 def test_odometry_step_midpoint_is_not_yet(capsys):
-    result = ch06.odometry_step_check(
-        lambda p, left, right, b: ch06.reference_odometry_step(p, left, right, b, "midpoint"))
+    def midpoint(pose, d_left, d_right, wheel_base):
+        d_c, phi = (d_right + d_left) / 2, (d_right - d_left) / wheel_base
+        heading = pose.theta + phi / 2
+        theta = math.atan2(math.sin(pose.theta + phi), math.cos(pose.theta + phi))
+        return (pose.x + d_c * math.cos(heading), pose.y + d_c * math.sin(heading), theta)
+
+    result = ch06.odometry_step_check(midpoint)
     assert_not_yet(result, capsys, "theta + phi/2", "as printed")
 
 
@@ -113,14 +117,16 @@ def test_odometry_step_returning_nan_is_not_yet(capsys):
 # --- exercise 3: the whole log --------------------------------------------------------
 
 
-def arcs_step_by_step(d_left, d_right, wheel_base, start):
-    """A loop of exact-arc steps: slow, but the same answer."""
+def arcs_step_by_step(d_left, d_right, wheel_base, start, method="exact"):
+    """A loop of exact-arc steps: slow, but the same answer (``method`` "euler" or
+    "midpoint": the chords a student might take instead)."""
     poses = [start]
     for left, right in zip(d_left, d_right):
         d_c, phi = (left + right) / 2, (right - left) / wheel_base
         p = poses[-1]
-        length = d_c if phi == 0 else d_c * math.sin(phi / 2) / (phi / 2)
-        heading = p.theta + phi / 2
+        exact = method == "exact" and phi != 0
+        length = d_c * math.sin(phi / 2) / (phi / 2) if exact else d_c
+        heading = p.theta if method == "euler" else p.theta + phi / 2
         poses.append(Pose2D(p.x + length * math.cos(heading), p.y + length * math.sin(heading),
                             math.atan2(math.sin(p.theta + phi), math.cos(p.theta + phi))))
     return np.array([p.as_array() for p in poses])
@@ -135,7 +141,7 @@ def test_integrate_arcs_passes(capsys):
                                               ("midpoint", "sin(phi/2)/(phi/2)")])
 def test_integrate_arcs_other_methods_are_not_yet(method, fragment, capsys):
     result = ch06.integrate_arcs_check(
-        lambda left, right, b, s: integrate_odometry(left, right, b, s, method))
+        lambda left, right, b, s: arcs_step_by_step(left, right, b, s, method))
     assert_not_yet(result, capsys, fragment)
 
 
@@ -155,7 +161,7 @@ def test_integrate_arcs_dividing_by_zero_is_not_yet(capsys):
 
 def test_integrate_arcs_unwrapped_is_not_yet(capsys):
     def unwrapped(d_left, d_right, b, start):
-        poses = ch06.reference_integrate_arcs(d_left, d_right, b, start)
+        poses = arcs_step_by_step(d_left, d_right, b, start)
         poses[:, 2] = start.theta + np.concatenate([[0.0], np.cumsum((d_right - d_left) / b)])
         return poses
 
@@ -164,7 +170,7 @@ def test_integrate_arcs_unwrapped_is_not_yet(capsys):
 
 def test_integrate_arcs_without_the_start_row_is_not_yet(capsys):
     result = ch06.integrate_arcs_check(
-        lambda *args: ch06.reference_integrate_arcs(*args)[1:])
+        lambda *args: arcs_step_by_step(*args)[1:])
     assert_not_yet(result, capsys, "shape (50, 3), expected (51, 3)", "N + 1 poses")
 
 

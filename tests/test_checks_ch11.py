@@ -135,19 +135,28 @@ def test_correction_passes_an_independent_answer(capsys):
     (lambda log: (*student_correction(log)[:2], -student_correction(log)[2]), "sign"),
     (not_written, "NotImplementedError"),
     (ch11.reference_biggest_correction, "abcwc's own"),
+    (lambda log: ch11.reference_biggest_correction(log), "abcwc's own"),
+    # the log handed to the student carries no answer to read off
+    (lambda log: (log.corrected_at, *log.correction), "AttributeError"),
 ])
 def test_correction_refuses_plausible_slips(wrong, fragment, capsys):
     assert_not_yet(ch11.correction_check(wrong), capsys, fragment)
 
 
+def test_the_log_handed_out_holds_the_poses_alone():
+    log = ch11.localisation_log(11)
+    assert [name for name in vars(log)] == ["t", "odom", "map"]
+    assert np.array_equal(log.map, ch11._drive(11)[0].map)
+
+
 def test_the_log_corrects_once_in_a_big_way():
     """Away from the corridor the fixes are small (a second of drift); the one after it
     is the drift of the whole corridor."""
-    log = ch11.localisation_log(11)
+    log, truth = ch11._drive(11)
     t, metres, degrees = ch11.reference_biggest_correction(log)
-    assert t == pytest.approx(log.corrected_at) and 22.0 < t < 45.0
-    assert metres == pytest.approx(log.correction[0]) and metres > 0.3
+    assert t == pytest.approx(truth.at) and 22.0 < t < 45.0
+    assert metres == pytest.approx(truth.metres) and metres > 0.3
+    assert degrees == pytest.approx(truth.degrees)
     others = ch11.localisation_log(11)
-    clipped = ch11.LocalisationLog(others.t[:200], others.odom[:200], others.map[:200],
-                                   math.nan, (math.nan, math.nan))
+    clipped = ch11.LocalisationLog(others.t[:200], others.odom[:200], others.map[:200])
     assert ch11.reference_biggest_correction(clipped)[1] < 0.05

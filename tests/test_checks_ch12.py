@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from abcwc.checks import ch12
+from abcwc.params import default_params
 from abcwc.perception.depth import depth_image_to_scan
 from tests.check_helpers import assert_not_yet, assert_pass, not_written
 
@@ -79,6 +80,16 @@ def test_reach_check(capsys):
 ])
 def test_seen_check_explains(answer, fragment, capsys):
     assert_not_yet(ch12.seen_check(lambda: answer), capsys, fragment)
+
+
+def test_seen_check_explains_every_frame_of_the_chair(capsys):
+    """A frame of the chair that is no range sensor (the IMU) is the student's slip, told
+    as such, not a KeyError in the check."""
+    for frame in set(default_params().sensors) - ch12.SEEN_BY:
+        result = ch12.seen_check(lambda frame=frame: {frame, *ch12.SEEN_BY})
+        assert "raised" not in result.message, result.message
+        assert_not_yet(result, capsys, f"not {frame}; {frame}: ")
+    assert_not_yet(ch12.seen_check(lambda: {"imu_link"}), capsys, "imu_link: not a range sensor")
 
 
 def test_seen_check_passes_the_two(capsys):

@@ -75,5 +75,23 @@ def test_scores_check(capsys):
     assert precision < 0.9 and recall < 0.9  # dead reckoning does not make a map
     assert_pass(ch13.scores_check(lambda: (precision, recall)), capsys)
     assert_not_yet(ch13.scores_check(lambda: (recall, precision)), capsys, "swapped")
-    assert_not_yet(ch13.scores_check(lambda: (1.0, 1.0)), capsys, "scores")
+    assert_not_yet(ch13.scores_check(lambda: (0.9, 0.9)), capsys, "not what the EKF's map")
+    assert_not_yet(ch13.scores_check(lambda: ch13._scores("true poses")), capsys,
+                   "map at the true poses")
+    assert_not_yet(ch13.scores_check(lambda: ch13._scores("the EKF", tolerance=0)), capsys,
+                   "one cell's tolerance")
+
+
+def test_no_failure_message_holds_the_figures_to_copy(capsys):
+    """A wrong pair is told what slip it is, never the right figures (handing in the
+    figures of a failure message used to pass)."""
+    precision, recall = ch13.ekf_map_scores()
+    answer = {f"{precision:.2f}", f"{recall:.2f}", f"{precision:.3f}", f"{recall:.3f}"}
+    for wrong in [(0, 0), (1.0, 1.0), (recall, precision), (precision, 0.2),
+                  ch13._scores("true poses"), ch13._scores("the EKF", tolerance=0)]:
+        result = ch13.scores_check(lambda wrong=wrong: wrong)
+        capsys.readouterr()
+        assert not result
+        told = result.message.replace(f"you wrote ({wrong[0]:.2f}, {wrong[1]:.2f})", "")
+        assert not any(figure in told for figure in answer), result.message
     assert_not_yet(ch13.scores_check(lambda: 0.5), capsys, "(precision, recall)")

@@ -70,9 +70,17 @@ def test_the_floor_survey_closes_loops_and_a_planted_false_loop_is_found(capsys)
     assert with_loops.loops > 50 and without.loops == 0
     assert ch14.worst_keyframe_error(with_loops, log, laser) < \
         ch14.worst_keyframe_error(without, log, laser)
-    graph, planted = ch14.planted_graph()
-    assert planted == len(graph.edges) - 1
+    graph, planted, weak = ch14._planted()
+    assert graph is ch14.planted_graph()
+    assert 0 < planted < len(graph.edges) - 1 and 0 < weak < len(graph.edges) - 1
     assert_pass(ch14.false_loop_check(student_false_loop), capsys)
+    # the false edge is not the last one, and the largest error in metres is another edge
+    assert_not_yet(ch14.false_loop_check(lambda g: len(g.edges) - 1), capsys,
+                   "fits the solved poses")
+    assert_not_yet(ch14.false_loop_check(lambda g: student_false_loop(g, metres=True)),
+                   capsys, "information matrix, not in metres")
+    assert_not_yet(ch14.false_loop_check(lambda g: ch14.reference_false_loop(g)), capsys,
+                   "abcwc's own")
     assert_not_yet(ch14.false_loop_check(lambda g: 0), capsys, "fits the solved poses")
     assert_not_yet(ch14.false_loop_check(lambda g: "the last"), capsys, "edge's index")
     assert_not_yet(ch14.false_loop_check(ch14.reference_false_loop), capsys, "abcwc's own")

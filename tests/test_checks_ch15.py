@@ -81,9 +81,8 @@ def test_path_clearance_by_hand():
 # --- exercise 3: diagnose -----------------------------------------------------------------
 
 
-def test_scan_yaw_found_by_fitting_the_marks_to_the_walls(capsys):
+def fitted_yaw(marks, walls_here, lidar) -> float:
     """An independent search: the yaw whose turn of the marks lays most on the walls."""
-    marks, walls_here, lidar = ch15.mystery_scan()
     points = marks.cell_to_world(*np.nonzero(marks.cost == 254)) - lidar
     wall_cells = set(zip(*np.nonzero(walls_here.cost == 254)))
 
@@ -96,14 +95,25 @@ def test_scan_yaw_found_by_fitting_the_marks_to_the_walls(capsys):
             near += any((r + dr, q + dc) in wall_cells for dr in (-1, 0, 1) for dc in (-1, 0, 1))
         return near
 
-    best = max(np.arange(-15, 15.5, 0.5), key=on_walls)
-    assert_pass(ch15.scan_yaw_check(lambda: float(best)), capsys)
+    return float(max(np.arange(-15, 15.5, 0.5), key=on_walls))
+
+
+def test_scan_yaw_found_by_fitting_the_marks_to_the_walls(capsys):
+    assert_pass(ch15.scan_yaw_check(fitted_yaw), capsys)
+
+
+def test_scan_yaw_cases_differ_so_no_single_angle_passes(capsys):
+    errors = [yaw for _, yaw in ch15.MYSTERY_CASES]
+    assert min(abs(a - b) for a in errors for b in errors if a is not b) > 4.0
+    assert {math.copysign(1, yaw) for yaw in errors} == {-1.0, 1.0}
+    for yaw in errors:  # the notebook's answer, or any other case's, written down
+        assert_not_yet(ch15.scan_yaw_check(lambda *evidence, yaw=yaw: yaw), capsys, "not")
 
 
 @pytest.mark.parametrize(("answer", "fragment"), [
-    (lambda: 6.0, "wrong sign"),
-    (lambda: 0.0, "is not it"),
-    (lambda: math.radians(-6.0), "radians"),
+    (lambda *evidence: -fitted_yaw(*evidence), "wrong sign"),
+    (lambda *evidence: 0.0, "is not it"),
+    (lambda *evidence: math.radians(fitted_yaw(*evidence)), "radians"),
     (not_written, "not written yet"),
 ])
 def test_scan_yaw_refuses_wrong_answers(answer, fragment, capsys):

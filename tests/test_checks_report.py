@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import functools
+import linecache
+
 import numpy as np
 import pytest
 
+import abcwc.geometry
 from abcwc import checks
 from abcwc.checks import (
     CheckResult,
@@ -15,6 +19,7 @@ from abcwc.checks import (
     expect_close,
     expect_equal,
     expect_no_slip,
+    expect_own,
     format_value,
     use_or_fallback,
 )
@@ -82,12 +87,61 @@ def test_exception_from_student_code_is_named_without_traceback(capsys):
 
     result = check("pot mapping", pot_mapping, broken)
     out = capsys.readouterr().out
+    line = broken.__code__.co_firstlineno + 1
     assert out == (
         "… not yet — pot mapping: your code raised ValueError: "
-        "fb pot 412 outside 110..398 (second line)\n"
+        f"fb pot 412 outside 110..398 (second line) (line {line} of test_checks_report.py: "
+        'raise ValueError(f"fb pot {joystick + 302} outside 110..398\\n(second line)"))\n'
     )
     assert "Traceback" not in out
     assert not result
+
+
+def test_exception_names_the_line_of_the_students_code_that_raised(capsys):
+    def plus_one(joystick: int) -> int:
+        doubled = joystick * 2
+        return undefined_name + doubled  # noqa: F821 - the student's slip
+
+    check("pot mapping", pot_mapping, plus_one)
+    line = plus_one.__code__.co_firstlineno + 2
+    assert capsys.readouterr().out == (
+        "… not yet — pot mapping: your code raised NameError: name 'undefined_name' is not "
+        f"defined (line {line} of test_checks_report.py: return undefined_name + doubled "
+        "# noqa: F821 - the student's slip)\n")
+
+
+def test_the_line_is_the_students_even_when_a_library_raised_below_it(capsys):
+    def stacked(joystick: int) -> int:
+        return int(np.stack([np.zeros(2), np.zeros(3)]).sum())
+
+    check("pot mapping", pot_mapping, stacked)
+    out = capsys.readouterr().out
+    line = stacked.__code__.co_firstlineno + 1
+    assert out.startswith("… not yet — pot mapping: your code raised ValueError: ")
+    assert out.endswith(f"(line {line} of test_checks_report.py: return "
+                        "int(np.stack([np.zeros(2), np.zeros(3)]).sum()))\n")
+
+
+def test_a_notebook_cell_is_named_by_its_line_alone(capsys):
+    """ipykernel compiles each cell as a file ipykernel_<pid>/<hash>.py."""
+    cell = "/tmp/ipykernel_4242/1234567.py"
+    source = "def f(joystick):\n    y = 1\n    return x + y\n"
+    linecache.cache[cell] = (len(source), None, source.splitlines(True), cell)
+    namespace: dict = {}
+    exec(compile(source, cell, "exec"), namespace)
+    try:
+        check("pot mapping", pot_mapping, namespace["f"])
+    finally:
+        del linecache.cache[cell]
+    assert capsys.readouterr().out == (
+        "… not yet — pot mapping: your code raised NameError: name 'x' is not defined "
+        "(line 3: return x + y)\n")
+
+
+def test_an_error_inside_abcwc_alone_names_no_line(capsys):
+    check("angle", abcwc.geometry.wrap_angle, "a")  # raised in abcwc and numpy
+    out = capsys.readouterr().out
+    assert out.startswith("… not yet — angle: your code raised ") and "line" not in out
 
 
 def test_exception_without_message_and_long_messages(capsys):
@@ -95,8 +149,8 @@ def test_exception_without_message_and_long_messages(capsys):
     check("b", lambda: (_ for _ in ()).throw(RuntimeError()))
     check("c", lambda: expect(False, "x" * 1000))
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0] == "… not yet — a: your code raised KeyError: 'missing'"
-    assert lines[1] == "… not yet — b: your code raised RuntimeError"
+    assert lines[0].startswith("… not yet — a: your code raised KeyError: 'missing' (line ")
+    assert lines[1].startswith("… not yet — b: your code raised RuntimeError (line ")
     assert lines[2].endswith("x…") and len(lines[2]) < 400
 
 
@@ -277,3 +331,114 @@ def test_a_stub_of_an_earlier_exercise_is_named(capsys):
         "first\n")
     check("pot mapping", pot_mapping, pot_from_joystick)  # its own check: the cell above
     assert "the cell above still raises" in capsys.readouterr().out
+
+
+# --- the library's own, wrapped -------------------------------------------------------
+
+
+def reference_pot(joystick: int) -> int:
+    return TABLE[joystick]
+
+
+reference_pot.__module__ = "abcwc.checks.ch01"
+
+
+def refusal(fn, *library_fns) -> str:
+    with pytest.raises(NotYet) as info:
+        expect_own(fn, *library_fns)
+    return str(info.value)
+
+
+def calls_library(joystick: int) -> int:
+    return library_pot(joystick)
+
+
+def calls_through_a_helper(joystick: int) -> int:
+    return calls_library(joystick) + 0
+
+
+@pytest.mark.parametrize("wrapped", [
+    library_pot,
+    functools.partial(library_pot),
+    lambda joystick: library_pot(joystick),
+    lambda joystick: abcwc.geometry.wrap_angle(joystick),
+    calls_library,
+    calls_through_a_helper,
+    functools.partial(lambda fn, joystick: fn(joystick), library_pot),
+    (lambda fn: lambda joystick: fn(joystick))(library_pot),   # a closure
+    functools.update_wrapper(lambda joystick: 0, library_pot),  # functools.wraps
+], ids=["bare", "partial", "lambda", "module attribute", "def", "through a helper",
+        "partial argument", "closure", "wraps"])
+def test_the_librarys_function_is_refused_however_it_is_wrapped(wrapped):
+    own = (library_pot, abcwc.geometry.wrap_angle)
+    message = refusal(wrapped, *own)
+    assert message.startswith("that ") and message.endswith("write yours")
+    assert "library_pot" in message or "wrap_angle" in message
+
+
+class LibraryGrid:
+    """Stands in for a class of abcwc's, such as OccupancyGrid."""
+
+    def integrate(self, joystick: int) -> int:
+        return TABLE[joystick]
+
+
+LibraryGrid.__module__ = "abcwc.mapping.grid"
+
+
+def test_a_method_of_abcwcs_named_through_its_class_is_refused():
+    def mine(joystick: int) -> int:
+        return LibraryGrid.integrate(LibraryGrid(), joystick)
+
+    assert refusal(mine, LibraryGrid.integrate) == (
+        "that calls abcwc's own LibraryGrid.integrate: write yours")
+    expect_own(mine, library_pot)  # another exercise's function: this one is the student's
+
+
+def test_a_function_defined_in_abcwc_is_refused_by_its_module_even_in_a_partial(capsys):
+    assert refusal(functools.partial(abcwc.geometry.wrap_angle)) == (
+        "that is abcwc's own wrap_angle (from abcwc.geometry): write yours")
+    result = check("pot mapping", pot_mapping, functools.partial(reference_pot))
+    assert not result and "that is abcwc's own reference_pot" in result.message
+    capsys.readouterr()
+
+
+def test_the_students_own_function_passes_though_it_calls_allowed_helpers(capsys):
+    def own(joystick: int) -> int:  # uses a helper of abcwc's that the exercise allows
+        return int(round(abcwc.geometry.wrap_angle(0.0))) + TABLE[joystick]
+
+    expect_own(own, library_pot)
+    expect_own(lambda joystick: own(joystick), library_pot)
+    expect_own(functools.partial(own), library_pot)
+    assert check("pot mapping", pot_mapping, lambda joystick: own(joystick))
+    assert capsys.readouterr().out.startswith("✔ pass")
+
+
+# --- pass and not yet, as a notebook shows them -----------------------------------------
+
+
+def test_pass_and_not_yet_look_different_in_html_with_the_same_text():
+    passed = CheckResult("pot mapping", True, "all 2 values match")
+    failed = CheckResult("pot mapping", False, "joystick 398 gave 250 < 253")
+    assert passed._repr_html_() == passed.html() == (
+        '<pre style="margin:0"><span style="color:#1a7f37;font-weight:normal">✔ pass</span>'
+        " — pot mapping: all 2 values match</pre>")
+    assert failed.html() == (
+        '<pre style="margin:0"><span style="color:#b35900;font-weight:bold">… not yet</span>'
+        " — pot mapping: joystick 398 gave 250 &lt; 253</pre>")
+
+
+def test_in_a_kernel_the_line_is_displayed_as_html_with_the_text_as_fallback(monkeypatch,
+                                                                               capsys):
+    IPython = pytest.importorskip("IPython")
+    shown = []
+
+    class Kernel:
+        kernel = object()
+
+    monkeypatch.setattr(IPython, "get_ipython", lambda: Kernel())
+    monkeypatch.setattr("IPython.display.display",
+                        lambda data, raw: shown.append((data, raw)))
+    result = check("pot mapping", pot_mapping, right)
+    assert capsys.readouterr().out == ""
+    assert shown == [({"text/plain": result.line, "text/html": result.html()}, True)]

@@ -411,7 +411,8 @@ def test_nbval_fails_on_changed_solution_output_and_on_course_errors(nbval_works
     solution = nbval_workspace / "solutions" / "00_example.ipynb"
     nb = nbformat.read(solution, as_version=4)
     (cell,) = [cell for cell in nb.cells if cell.id == "check"]
-    cell.outputs[0].text = cell.outputs[0].text.replace("all 3", "all 4")
+    for mime, text in cell.outputs[0].data.items():  # a check's line, as text and HTML
+        cell.outputs[0].data[mime] = text.replace("all 3", "all 4")
     nbformat.write(nb, solution)
     edit_cell(
         nbval_workspace / "course" / "00_example.ipynb", "plot", source="raise RuntimeError('boom')"
@@ -436,8 +437,10 @@ def test_student_notebook_runs_to_the_end_with_not_yet_and_fallback(tmp_path, mo
     monkeypatch.setenv("MPLBACKEND", "module://matplotlib_inline.backend_inline")
     NotebookClient(nb, timeout=120, kernel_name="python3").execute()
 
-    text = "".join(
-        out.get("text", "") for cell in nb.cells if cell.cell_type == "code" for out in cell.outputs
+    text = "".join(  # printed lines, and a check's line shown as text/plain beside its HTML
+        out.get("text", "") or out.get("data", {}).get("text/plain", "") + "\n"
+        for cell in nb.cells if cell.cell_type == "code" for out in cell.outputs
+        if "image/png" not in out.get("data", {})
     )
     assert text.splitlines() == [
         "module://matplotlib_inline.backend_inline",

@@ -25,7 +25,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_close, expect_no_slip, format_value
+from abcwc.checks.report import (
+    NotYet,
+    checker,
+    expect,
+    expect_close,
+    expect_no_slip,
+    expect_own,
+    format_value,
+)
 from abcwc.params import ChairParams, default_params
 from abcwc.types import Pose2D, SensorFrame, SimTruth, make_frame
 
@@ -77,6 +85,7 @@ _GEOMETRIES = (  # d_wheel (m), d_encoder (m), pulses per encoder turn
 @checker("counts per wheel turn")
 def counts_per_wheel_turn(fn: Callable[[float, float, int], float]) -> str:
     """Check ``fn(d_wheel, d_encoder, pulses)`` against ``pulses * d_wheel / d_encoder``."""
+    expect_own(fn, reference_counts_per_wheel_turn)
     for d_wheel, d_encoder, pulses in _GEOMETRIES:
         expected = reference_counts_per_wheel_turn(d_wheel, d_encoder, pulses)
         got = fn(d_wheel, d_encoder, pulses)
@@ -95,6 +104,7 @@ def counts_per_wheel_turn(fn: Callable[[float, float, int], float]) -> str:
 @checker("encoder counts to distance")
 def encoder_counts_to_distance(fn: Callable[..., object]) -> str:
     """Check ``fn(counts, counts_per_turn, d_wheel)``: scalars, negatives and arrays."""
+    expect_own(fn, reference_encoder_counts_to_distance)
     p = default_params()
     per_turn = p.counts_per_wheel_turn
     cases = [
@@ -128,6 +138,7 @@ def _frame(sonar: float, pose: Pose2D | None = None) -> SensorFrame:
 @checker("distance ahead")
 def distance_ahead(fn: Callable[[SensorFrame, ChairParams], float]) -> str:
     """Check ``fn(frame, params)`` on made-up frames and on one from the simulator."""
+    expect_own(fn, reference_distance_ahead)
     p = default_params()
     mount = p.sonar.mount[0]
     for reading in (2.605, 1.0, p.sonar.min_range):

@@ -32,6 +32,7 @@ from abcwc.checks.report import (
     expect,
     expect_equal,
     expect_no_slip,
+    expect_own,
     format_value,
     numbers,
 )
@@ -99,6 +100,7 @@ def reference_square_sequence(t: float) -> PotCommand:
 @checker("pot mapping")
 def pot_mapping(fn: Callable[[int], int]) -> str:
     """Check eqn 1 at the thesis's worked values, then over the joystick's whole range."""
+    expect_own(fn, joystick_to_pot_byte)
     for joystick, expected in THESIS_EQN1_VALUES:
         got = fn(joystick)
         _expect_int(got, joystick)
@@ -132,6 +134,7 @@ def _as_pair(command: object) -> tuple[int, int] | None:
 @checker("table 6 corrected")
 def table_6(fn: Callable[[str], PotCommand]) -> str:
     """Check the corrected table 6: full deflection per direction, as PotCommands."""
+    expect_own(fn, direction_pot_command)
     directions = ("forward", "reverse", "left", "right", "stop")
     for direction in directions:
         got = fn(direction)
@@ -167,6 +170,7 @@ def square_sequence(fn: Callable[[float], PotCommand]) -> str:
     through the motor controller's model (:func:`abcwc.control.pot_byte_to_deflection`
     times the chair's full-deflection speed and turn rate).
     """
+    expect_own(fn, reference_square_sequence)
     p = default_params()
     seen: dict[str, tuple[int, int]] = {}
     samples = 0

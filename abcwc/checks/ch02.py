@@ -28,6 +28,7 @@ from abcwc.checks.report import (
     expect_close,
     expect_equal,
     expect_no_slip,
+    expect_own,
     format_value,
 )
 from abcwc.control.pots import turn_value
@@ -51,6 +52,7 @@ TURN_VALUES = (
 @checker("eqn 2, turn value")
 def turn_value_check(fn: Callable[[float], float]) -> str:
     """Compare ``fn(angle_deg)`` with eqn 2 at the thesis's values and every 7.5 degrees."""
+    expect_own(fn, turn_value)
     for angle, expected, why in TURN_VALUES:
         expect_close(fn(angle), expected, what=f"angle {angle:+g} deg", rtol=0.0, atol=1e-6,
                      ref=f"eqn 2; {why}")
@@ -88,6 +90,7 @@ def twist_to_pots_check(fn: Callable[[float, float], object]) -> str:
     two bytes, rounding in m/s, in mm/s, or Python's round-half-to-even may pick
     either neighbour, and one byte is only 14 mm/s or 0.7 deg/s.
     """
+    expect_own(fn, twist_to_pot_command)
     p = default_params()
     expect_equal(_pots(fn, 0.0, 0.0), (p.pot_neutral, p.pot_neutral),
                  what="standing still, (fb, lr)", ref="both pots at neutral")

@@ -17,7 +17,7 @@ import inspect
 import math
 from collections.abc import Callable
 
-from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_close, expect_own, format_value
 from abcwc.control.pots import AvoidAction, sonar_turn_angle
 from abcwc.types import SensorFrame
 
@@ -74,6 +74,7 @@ def table7_turn_angle(distance_m: float) -> float | None:
 @checker("table 7, turn angle")
 def turn_angle_check(fn: Callable[[float], float | None]) -> str:
     """Compare ``fn(distance_m)`` with every row of table 7, the worked example and more."""
+    expect_own(fn, table7_turn_angle, sonar_turn_angle)
     cases = [(mm / 1000.0, angle, f"table 7, {mm} mm") for mm, angle in TABLE_7]
     cases += [(0.55, 70.3125, "the thesis's worked example, 550 mm"),
               (5.0, 0.0, "nothing within 1 m: no turn"),

@@ -28,7 +28,15 @@ from typing import Any
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_close, expect_no_slip, format_value
+from abcwc.checks.report import (
+    NotYet,
+    checker,
+    expect,
+    expect_close,
+    expect_no_slip,
+    expect_own,
+    format_value,
+)
 from abcwc.estimation import odometry
 from abcwc.geometry import wrap_angle
 from abcwc.params import default_params
@@ -85,6 +93,7 @@ def _wrap_to(counts: np.ndarray, bits: int) -> np.ndarray:
 @checker("wheel travel")
 def wheel_travel_check(fn: Callable[..., np.ndarray]) -> str:
     """Check ``fn(ticks, distance_per_count, bits)`` on hand cases, wraps and a long log."""
+    expect_own(fn, reference_wheel_travel)
     per_count = default_params().distance_per_count
     rng = np.random.default_rng(6)
     steps = np.column_stack([rng.integers(-20, 61, 300), rng.integers(-60, 21, 300)])
@@ -173,6 +182,7 @@ def _step_hint(got: Pose2D, pose: Pose2D, d_left: float, d_right: float, b: floa
 @checker("one odometry step")
 def odometry_step_check(fn: Callable[..., Any]) -> str:
     """Check ``fn(pose, d_left, d_right, wheel_base)`` against eqns 6-10 and the library."""
+    expect_own(fn, reference_odometry_step)
     c30, s30 = math.cos(math.pi / 6), math.sin(math.pi / 6)
     cases = [  # pose, d_left, d_right, wheel base, expected (x, y, theta), what
         (Pose2D(0.0, 0.0, 0.0), 0.5, 0.5, _B, (0.5, 0.0, 0.0), "straight ahead"),
@@ -260,6 +270,7 @@ def _integrate_hint(got: np.ndarray, d_left: np.ndarray, d_right: np.ndarray, b:
 @checker("whole log, exact arcs")
 def integrate_arcs_check(fn: Callable[..., np.ndarray]) -> str:
     """Check ``fn(d_left, d_right, wheel_base, start)`` on closed forms and the library."""
+    expect_own(fn, reference_integrate_arcs, odometry.integrate_odometry)
     cases = []
     start = Pose2D(1.0, 2.0, math.pi / 4)
     d = np.full(50, 0.02)

@@ -36,6 +36,7 @@ from abcwc.checks.report import (
     expect,
     expect_close,
     expect_equal,
+    expect_own,
     format_value,
     numbers,
 )
@@ -90,6 +91,7 @@ _BEARING_CASES = (
 def distance_and_bearing_check(fn: Callable[[Pose2D, tuple[float, float]], Any]) -> str:
     """Compare ``fn(pose, goal)`` with eqns 11-12 (alpha wrapped) on hand-worked and
     random cases."""
+    expect_own(fn, reference_distance_and_bearing)
     rng = np.random.default_rng(7)
     cases = [(pose, goal, why) for pose, goal, why in _BEARING_CASES]
     for _ in range(200):
@@ -150,6 +152,7 @@ def turn_then_drive_check(fn: Callable[..., Any]) -> str:
     Hand-worked cases with :data:`THESIS_MACHINE`, the same with A.10's single
     threshold (``align_tolerance = heading_tolerance``), then a random sweep.
     """
+    expect_own(fn, reference_turn_then_drive)
     single = dict(THESIS_MACHINE, align_tolerance=THESIS_MACHINE["heading_tolerance"])
     rng = np.random.default_rng(7)
     cases = [(state, rho, alpha, why, THESIS_MACHINE) for state, rho, alpha, why in _STATE_CASES]
@@ -193,6 +196,7 @@ _LAW_CASES = (  # (rho m, alpha rad, settings changed from the defaults, what it
 @checker("proportional go-to-goal")
 def proportional_command_check(fn: Callable[..., Any]) -> str:
     """Compare ``fn(rho, alpha, **gains)`` with the limited proportional law."""
+    expect_own(fn, reference_proportional_command)
     rng = np.random.default_rng(7)
     cases = [(rho, alpha, dict(_DEFAULTS, **changes), why)
              for rho, alpha, changes, why in _LAW_CASES]

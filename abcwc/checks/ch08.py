@@ -32,7 +32,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_close, expect_own, format_value
 from abcwc.estimation import umbmark
 from abcwc.params import default_params
 
@@ -126,6 +126,7 @@ def _cases() -> list[tuple[str, np.ndarray, np.ndarray]]:
 @checker("centres of gravity and E_max,syst")
 def centres_check(fn: Callable[[np.ndarray, np.ndarray], tuple]) -> str:
     """``fn(cw_errors, ccw_errors) -> (cg_cw, cg_ccw, e_max)`` against eqns 5.4-5.6."""
+    expect_own(fn, reference_centres_of_gravity_and_emax)
     cases = _cases()
     for label, cw, ccw in cases:
         got = _parts(fn(cw.copy(), ccw.copy()), 3, "cg_cw, cg_ccw, e_max")
@@ -154,6 +155,7 @@ def e_max_of_thesis() -> float:
 @checker("alpha, beta and R")
 def alpha_beta_radius_check(fn: Callable[[np.ndarray, np.ndarray, float], tuple]) -> str:
     """``fn(cg_cw, cg_ccw, side) -> (alpha, beta, R)`` against eqns 5.9-5.11 (radians)."""
+    expect_own(fn, reference_alpha_beta_radius, umbmark.alpha_beta)
     model = worked_example()
     side = umbmark.THESIS_SIDE
     cases = [("the worked example", model["cw"][0], model["ccw"][0], side),
@@ -196,6 +198,7 @@ def _number(value: object) -> bool:
 @checker("E_b, E_d and the correction factors")
 def correction_factors_check(fn: Callable[[float, float, float], tuple]) -> str:
     """``fn(alpha, R, b) -> (E_b, b_actual, E_d, c_left, c_right)``, eqns 5.12-5.15."""
+    expect_own(fn, reference_correction_factors)
     worked_alpha = math.pi / 2 * (1 - 1 / 1.03)
     worked_radius = 1.03 * WHEEL_BASE / 2 * 2.01 / 0.01
     cases = [("the worked example", worked_alpha, worked_radius, WHEEL_BASE),

@@ -35,6 +35,7 @@ from abcwc.checks.report import (
     expect,
     expect_close,
     expect_no_slip,
+    expect_own,
     format_value,
     numbers,
 )
@@ -116,6 +117,7 @@ def _refuses(fn: Callable[[object], object], samples: object, what: str) -> None
 @checker("gyro bias")
 def bias_check(fn: Callable[[np.ndarray], float]) -> str:
     """``fn(samples) -> bias`` (rad/s): the mean of a still window; refuses empty/NaN."""
+    expect_own(fn, reference_estimate_bias)
     rng = np.random.default_rng(9)
     log, truth = still_log()
     cases = [
@@ -173,6 +175,7 @@ def _wrapped_close(got: np.ndarray, want: np.ndarray, what: str, ref: str,
 @checker("heading from the gyro")
 def heading_check(fn: Callable[..., np.ndarray]) -> str:
     """``fn(t, gyro_z, theta0, bias) -> headings`` against eqn 14, rectangle per period."""
+    expect_own(fn, reference_integrate_heading)
     rng = np.random.default_rng(14)
     t2 = PERIOD * np.arange(101)
     t60 = PERIOD * np.arange(3001)
@@ -295,6 +298,7 @@ def _hint_step(got: Pose2D, want: Pose2D, pose: Pose2D, d_left: float, d_right: 
 @checker("one fused odometry step")
 def fused_step_check(fn: Callable[..., Pose2D]) -> str:
     """``fn(pose, d_left, d_right, gyro_z, dt, bias) -> Pose2D``: eqns 14 and 16."""
+    expect_own(fn, reference_fused_step)
     cases = [  # what, pose, d_left, d_right, gyro_z, dt, bias
         ("straight ahead", Pose2D(1.0, 2.0, 0.3), 0.02, 0.02, 0.0, 0.02, 0.0),
         ("a spin on the spot", Pose2D(1.0, 2.0, 0.3), -0.005, 0.005, 0.5, 0.02, 0.0),

@@ -26,7 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from abcwc.checks.report import NotYet, checker, expect, expect_close, format_value
+from abcwc.checks.report import NotYet, checker, expect, expect_close, expect_own, format_value
 from abcwc.estimation.ekf import H_GYRO, H_POSE, H_WHEEL, POSE, kalman_update, nees
 from abcwc.estimation.ekf import motion as reference_motion
 from abcwc.estimation.ekf import motion_jacobian as reference_motion_jacobian
@@ -91,6 +91,8 @@ def _finite_difference(f: Callable, s: np.ndarray, dt: float, eps: float = 1e-6)
 def motion_check(motion_fn: Callable[[np.ndarray, float], np.ndarray],
                  jacobian_fn: Callable[[np.ndarray, float], np.ndarray]) -> str:
     """Check ``motion_fn(s, dt)`` (6,) and ``jacobian_fn(s, dt)`` (6, 6) at five states."""
+    expect_own(jacobian_fn, reference_motion, reference_motion_jacobian)
+    expect_own(motion_fn, reference_motion, reference_motion_jacobian)
     names = ("x'", "y'", "theta'", "v'", "omega'", "b'")
     for state, dt in _STATES:
         s = np.array(state)
@@ -142,6 +144,7 @@ def _update_cases() -> list[tuple[str, np.ndarray, np.ndarray, np.ndarray, np.nd
 @checker("one Kalman update")
 def kalman_update_check(update_fn: Callable[..., tuple[np.ndarray, np.ndarray]]) -> str:
     """Check ``update_fn(x, P, z, H, R) -> (x, P)`` against filterpy's ``update``."""
+    expect_own(update_fn, reference_kalman_update)
     from filterpy.kalman import update as filterpy_update
 
     for what, x, p, z, h, r in _update_cases():
@@ -171,6 +174,7 @@ def kalman_update_check(update_fn: Callable[..., tuple[np.ndarray, np.ndarray]])
 @checker("NEES of a sample")
 def nees_check(nees_fn: Callable[[np.ndarray, np.ndarray, np.ndarray], float]) -> str:
     """Check ``nees_fn(truth, estimate, P)`` for a pose (x, y, theta) and its 3 x 3 P."""
+    expect_own(nees_fn, reference_nees_sample, nees)
     diag = np.diag([0.01, 0.04, 0.0025])
     rng = np.random.default_rng(3)
     a = rng.normal(scale=0.1, size=(3, 3))

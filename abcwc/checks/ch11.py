@@ -204,8 +204,17 @@ class LocalisationLog:
     t: np.ndarray
     odom: np.ndarray
     map: np.ndarray
-    corrected_at: float  # s, when the localiser caught up after the corridor
-    correction: tuple[float, float]  # m and deg it moved the estimate then
+
+
+@dataclass(frozen=True)
+class _Correction:
+    """What the check knows of a log and the student is to find: when the localiser
+    caught up after the corridor (s), and how far (m) and by how much (deg) it moved the
+    estimate then."""
+
+    at: float
+    metres: float
+    degrees: float
 
 
 def _integrate(v: np.ndarray, w: np.ndarray, dt: float, start: np.ndarray) -> np.ndarray:
@@ -218,6 +227,11 @@ def _integrate(v: np.ndarray, w: np.ndarray, dt: float, start: np.ndarray) -> np
 
 
 def localisation_log(seed: int = 11) -> LocalisationLog:
+    """The log of :func:`_drive` as the student gets it: poses only, not the answer."""
+    return _drive(seed)[0]
+
+
+def _drive(seed: int) -> tuple[LocalisationLog, _Correction]:
     """A 60 s drive: the odometry turns 3 % too much and drifts 0.25 deg/s; the localiser
     fixes the estimate on the map every second, except in a corridor where its scans
     match nothing (from 22 s to a moment between 38 and 45 s that the seed picks), after
@@ -232,7 +246,7 @@ def localisation_log(seed: int = 11) -> LocalisationLog:
     corridor = (22.0, round(float(rng.uniform(38.0, 45.0)), 1))
     map_to_odom = np.asarray(compose(truth[0], inverse(odom[0])), dtype=float)
     estimate = np.zeros_like(truth)
-    corrected_at, correction = math.nan, (math.nan, math.nan)
+    correction = _Correction(math.nan, math.nan, math.nan)
     for k, time in enumerate(t):
         fix = (abs(time - round(time)) < 1e-9 and not corridor[0] < time < corridor[1]) \
             or abs(time - corridor[1]) < 1e-9
@@ -241,13 +255,13 @@ def localisation_log(seed: int = 11) -> LocalisationLog:
             before = np.asarray(compose(map_to_odom, odom[k]), dtype=float)
             map_to_odom = np.asarray(compose(matched, inverse(odom[k])), dtype=float)
             if abs(time - corridor[1]) < 1e-9:
-                corrected_at = float(time)
-                correction = (float(np.hypot(*(matched[:2] - before[:2]))),
-                              float(math.degrees(wrap_angle(matched[2] - before[2]))))
+                correction = _Correction(
+                    float(time), float(np.hypot(*(matched[:2] - before[:2]))),
+                    float(math.degrees(wrap_angle(matched[2] - before[2]))))
         estimate[k] = np.asarray(compose(map_to_odom, odom[k]), dtype=float)
     estimate[:, 2] = wrap_angle(estimate[:, 2])
     odom[:, 2] = wrap_angle(odom[:, 2])
-    return LocalisationLog(t, odom, estimate, corrected_at, correction)
+    return LocalisationLog(t, odom, estimate), correction
 
 
 def reference_biggest_correction(log: LocalisationLog) -> tuple[float, float, float]:
@@ -268,20 +282,20 @@ def correction_check(fn: Callable[[LocalisationLog], tuple[float, float, float]]
     """``fn(log)`` on the chapter's log and on logs of other seeds."""
     expect_own(fn, reference_biggest_correction)
     for seed in seeds:
-        log = localisation_log(seed)
+        log, truth = _drive(seed)
         value = fn(log)
         when, metres, degrees = numbers(value, 3, "biggest_correction",
                                         "return (time s, distance m, turn deg)")
-        true_metres, true_degrees = log.correction
+        true_metres, true_degrees = truth.metres, truth.degrees
         found = f"(seed {seed}) you found t = {when:.1f} s, {metres:.3f} m, {degrees:+.2f} deg"
-        if abs(when - log.corrected_at) > 0.05:
+        if abs(when - truth.at) > 0.05:
             jumps = _map_to_odom_jumps(log)
             if abs(when - log.t[1 + int(np.argmax(jumps))]) < 0.05:
                 raise NotYet(f"{found}; that is where map -> odom's origin jumped most, "
                              "but a small turn about the odom origin, metres from the "
                              "chair, swings that origin a long way: measure where each "
                              "correction puts the chair")
-            raise NotYet(f"{found}; the big correction came at t = {log.corrected_at:.1f} s. "
+            raise NotYet(f"{found}; the big correction came at t = {truth.at:.1f} s. "
                          "Samples where the chair moves far are not corrections: look at "
                          "map -> odom, which only the localiser changes")
         if abs(degrees - math.radians(true_degrees)) < 0.01 and abs(true_degrees) > 0.5:
@@ -290,7 +304,7 @@ def correction_check(fn: Callable[[LocalisationLog], tuple[float, float, float]]
             raise NotYet(f"{found}; the estimate turned {true_degrees:+.2f} deg then "
                          "(the change in map -> odom's angle; mind its sign)")
         if abs(metres - true_metres) > 0.01:
-            odom_change = _map_to_odom_jump(log)
+            odom_change = _map_to_odom_jump(log, truth.at)
             if abs(metres - odom_change) < 0.01:
                 raise NotYet(f"{found}; that is how far map -> odom's origin moved, which "
                              "a turn about the far-away odom origin distorts; the chair's "
@@ -309,6 +323,7 @@ def _map_to_odom_jumps(log: LocalisationLog) -> np.ndarray:
     return np.hypot(*np.diff(map_to_odom[:, :2], axis=0).T)
 
 
-def _map_to_odom_jump(log: LocalisationLog) -> float:
-    k = int(np.argmin(np.abs(log.t - log.corrected_at)))
+def _map_to_odom_jump(log: LocalisationLog, at: float) -> float:
+    """How far map -> odom's origin moved at time ``at`` (s), in m."""
+    k = int(np.argmin(np.abs(log.t - at)))
     return float(_map_to_odom_jumps(log)[k - 1])

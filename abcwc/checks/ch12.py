@@ -212,7 +212,8 @@ def seen_check(could_have_seen: Callable[[], set]) -> str:
                           "the top")
     missing, extra = SEEN_BY - frames, frames - SEEN_BY
     if missing or extra:
-        said = [f"{f}: {reasons[f]}" for f in sorted(missing | extra)]
+        said = [f"{f}: {reasons.get(f, 'not a range sensor: it measures no distance at all')}"
+                for f in sorted(missing | extra)]
         raise NotYet(("missing " + ", ".join(sorted(missing)) + "; " if missing else "")
                      + ("not " + ", ".join(sorted(extra)) + "; " if extra else "")
                      + " / ".join(said))

@@ -8,8 +8,9 @@ Exercises:
   angle wrapped (g2o's EdgeSE2 error);
 * ``predicted_worst()``: a number written down *before* the run that measures it: the
   worst keyframe error (m) of the floor map with loop closure switched off;
-* ``false_loop(graph, poses)``: a diagnosis: which of a solved graph's edges is the
-  false loop closure planted in it.
+* ``false_loop(graph)``: a diagnosis: which of a solved graph's edges is the false loop
+  closure planted in it (at a seeded place among them, beside a weak true loop that is
+  further off in metres).
 
 Each ``reference_*`` function is an answer the notebook falls back on; a check handed
 the library's own function (or a ``reference_*``) says so instead of passing.
@@ -157,11 +158,29 @@ def prediction_check(predicted: Callable[[], float], measured: float, with_loops
 # --- exercise 3: find the false loop ---------------------------------------------------------
 
 
+CORRIDOR_SLIP = 3.0
+"""m: how far along a corridor the planted weak loop's match slipped."""
+
+
+def planted_graph() -> PoseGraph:
+    """The floor survey's graph with a false loop closure planted in it, solved with the
+    Cauchy kernel (:func:`_planted`); which edge is false is for the student to find."""
+    return _planted()[0]
+
+
 @lru_cache(maxsize=1)
-def planted_graph() -> tuple[PoseGraph, int]:
-    """The floor survey's graph with one false loop closure planted in it (two keyframes
-    about 2 m apart along a corridor said to be 0.2 m apart), solved with the Cauchy
-    kernel: ``(graph with the solved poses, index of the planted edge)``."""
+def _planted() -> tuple[PoseGraph, int, int]:
+    """The floor survey's graph with two loop edges inserted at places a seeded draw picks:
+
+    - a false loop closure: two keyframes about 2 m apart along a corridor said to be
+      0.2 m apart, as sure as the survey's other loops;
+    - a weak true loop: two keyframes of the same place, matched in a corridor where the
+      scan fits anywhere along it, so the match slipped :data:`CORRIDOR_SLIP` m along the
+      corridor, and the matcher said so: next to no information along it (1e-3 /m^2).
+
+    The weak loop disagrees with the map by more metres than the false one; in its own
+    standard deviations it fits. Solved with the Cauchy kernel: ``(graph with the solved
+    poses, index of the false edge, index of the weak edge)``."""
     _, _, _, result, _ = floor_survey()
     graph = result.graph
     poses = result.poses
@@ -173,14 +192,30 @@ def planted_graph() -> tuple[PoseGraph, int]:
         if j - i > 60 and 1.5 < d < 2.5:
             break
     true = np.asarray(relative(poses[i], poses[j]))
-    lie = np.array([0.2, 0.0, float(true[2])])
-    planted = len(graph.edges)
-    bad = replace(graph, poses=poses.copy(),
-                  edges=np.vstack([graph.edges, [[i, j]]]),
-                  measurements=np.vstack([graph.measurements, lie]),
-                  information=np.concatenate([graph.information, graph.information[-1:]]))
+    false_loop = ((i, j), np.array([0.2, 0.0, float(true[2])]), graph.information[-1])
+    for _ in range(1000):
+        a, b = sorted(int(v) for v in rng.integers(0, n, 2))
+        if b - a > 60 and float(np.hypot(*(poses[b, :2] - poses[a, :2]))) < 0.3:
+            break
+    weak_info = graph.information[-1].copy()
+    weak_info[0, :] = weak_info[:, 0] = 0.0
+    weak_info[0, 0] = 1e-3
+    weak_loop = ((a, b), np.asarray(relative(poses[a], poses[b])) + [CORRIDOR_SLIP, 0, 0],
+                 weak_info)
+    edges, measurements = list(map(tuple, graph.edges)), list(graph.measurements)
+    information = list(graph.information)
+    at = {}
+    for name, (edge, z, info) in (("false", false_loop), ("weak", weak_loop)):
+        k = int(rng.integers(1, len(edges)))  # never first, never last
+        edges.insert(k, edge)
+        measurements.insert(k, z)
+        information.insert(k, info)
+        at = {key: index + (index >= k) for key, index in at.items()}
+        at[name] = k
+    bad = replace(graph, poses=poses.copy(), edges=np.array(edges, dtype=graph.edges.dtype),
+                  measurements=np.array(measurements), information=np.array(information))
     solved, _ = optimise(bad, robust="cauchy", initial="given")
-    return replace(bad, poses=solved), planted
+    return replace(bad, poses=solved), at["false"], at["weak"]
 
 
 def reference_false_loop(graph: PoseGraph) -> int:
@@ -194,8 +229,8 @@ def reference_false_loop(graph: PoseGraph) -> int:
 def false_loop_check(fn: Callable[[PoseGraph], int]) -> str:
     """``fn(graph)`` against the planted edge."""
     expect_own(fn, reference_false_loop)
-    graph, planted = planted_graph()
-    value = fn(graph)
+    graph, planted, weak = _planted()
+    value = fn(replace(graph, poses=graph.poses.copy()))
     expect(isinstance(value, (int, np.integer)), f"false_loop gave {format_value(value)}; "
            "return the edge's index in graph.edges")
     if int(value) == planted:
@@ -203,6 +238,11 @@ def false_loop_check(fn: Callable[[PoseGraph], int]) -> str:
         return (f"edge {planted}, between keyframes {i} and {j}: the robust kernel left it "
                 "standing apart from the map")
     i, j = graph.edges[int(value)] if 0 <= int(value) < len(graph.edges) else (-1, -1)
+    if int(value) == weak:
+        raise NotYet(f"edge {int(value)} ({i} -> {j}) is {CORRIDOR_SLIP:.0f} m off, but its "
+                     "information says the match could slide along a corridor: in its own "
+                     "standard deviations it fits. Weigh each error by its information "
+                     "matrix, not in metres")
     raise NotYet(f"edge {int(value)} ({i} -> {j}) fits the solved poses; the false one is "
                  "the edge the solution disagrees with most, measured in its own standard "
                  "deviations (its information matrix), not in metres")

@@ -8,8 +8,9 @@ Exercises:
   cast to a byte (truncated);
 * ``predicted_clearance()``: a number written down *before* the cell that measures it:
   how near a wall (m) the planner's path with A.17's costmap comes;
-* ``scan_yaw_error()``: a diagnosis: by how many degrees a lidar's mount yaw was wrong
-  when a local costmap was built (read off the costmap, not from the cell that made it);
+* ``scan_yaw_error(marks, static, lidar_xy)``: a diagnosis: by how many degrees a lidar's
+  mount yaw was wrong when a local costmap was built, read off the costmap (and found on
+  scans the notebook never shows);
 * ``chair_costmap(walls, resolution)``: a design: a global costmap for the chair, judged
   on worlds the notebook never showed, where the chair must fit through doors of 0.85 m
   and keep off the walls of 2 m corridors.
@@ -37,10 +38,12 @@ from abcwc.navigation.costmap import (
 )
 from abcwc.navigation.planner import NoPathError, plan
 from abcwc.params import default_params
+from abcwc.types import Pose2D
 
 __all__ = [
     "DESIGN_DOOR",
     "MIN_CORRIDOR_CLEARANCE",
+    "MYSTERY_CASES",
     "chair_costmap_check",
     "design_worlds",
     "inflation_check",
@@ -144,24 +147,29 @@ def prediction_check(predicted: Callable[[], float], measured: float) -> str:
 # --- exercise 3: diagnose --------------------------------------------------------------
 
 
-_MYSTERY_YAW_DEG = -6.0  # what the diagnosis should find
+MYSTERY_CASES = ((Pose2D(13.0, 9.0, 0.3), -6.0),
+                 (Pose2D(5.0, 4.5, 2.2), 4.5),
+                 (Pose2D(24.0, 10.5, -0.6), -11.0))
+"""(where the chair stood, the mount's yaw error in degrees) of each diagnosis case: the
+notebook's first, then two it never shows, so no single angle passes."""
 
 
-def mystery_scan() -> tuple[Costmap, Costmap, np.ndarray]:
-    """The diagnosis's evidence: ``(marks, static, lidar_xy)``. ``marks`` is a 5 x 5 m
-    obstacle layer built from one lidar scan in the floor world with the lidar's mount
-    yaw set wrong; ``static`` the same window of the map's walls; ``lidar_xy`` (m) where
-    the lidar was. The chair's pose came from the simulator, so the walls and the
-    returns would lie on each other but for the yaw."""
+def mystery_scan(case: int = 0) -> tuple[Costmap, Costmap, np.ndarray]:
+    """The diagnosis's evidence for :data:`MYSTERY_CASES` ``[case]``: ``(marks, static,
+    lidar_xy)``. ``marks`` is a 5 x 5 m obstacle layer built from one lidar scan in the
+    floor world with the lidar's mount yaw set wrong; ``static`` the same window of the
+    map's walls; ``lidar_xy`` (m) where the lidar was. The chair's pose came from the
+    simulator, so the walls and the returns would lie on each other but for the yaw."""
     from abcwc.geometry import compose
     from abcwc.sim import SimBase
-    from abcwc.types import Pose2D
 
-    chair = SimBase("floor", seed=15, lidar=True, people=False,
-                    start=Pose2D(13.0, 9.0, 0.3))
+    if not 0 <= case < len(MYSTERY_CASES):
+        raise ValueError(f"case is 0 to {len(MYSTERY_CASES) - 1}, not {case}")
+    start, yaw_error = MYSTERY_CASES[case]
+    chair = SimBase("floor", seed=15, lidar=True, people=False, start=start)
     scan = chair.read().lidar
     mount = chair.params.lidar.mount
-    wrong = (mount[0], mount[1], mount[2] + math.radians(_MYSTERY_YAW_DEG))
+    wrong = (mount[0], mount[1], mount[2] + math.radians(yaw_error))
     marks = Costmap.rolling_window(chair.pose, 5.0, 0.05, default=0)
     marks.add_scan(scan, compose(chair.pose, wrong), 3.0, 3.5)
     static = Costmap.from_walls(chair.world.walls, 0.05)
@@ -175,21 +183,29 @@ def mystery_scan() -> tuple[Costmap, Costmap, np.ndarray]:
 
 
 @checker("scan yaw diagnosis")
-def scan_yaw_check(fn: Callable[[], float]) -> str:
-    """``fn()`` says by how many degrees the mount yaw was wrong (sign included)."""
-    true_error_deg = _MYSTERY_YAW_DEG
-    value = fn()
-    expect(isinstance(value, (int, float)) and math.isfinite(value),
-           f"scan_yaw_error() gave {format_value(value)}; write the angle in degrees")
-    if abs(value - math.radians(true_error_deg)) < 0.02:
-        raise NotYet("that looks like radians; the answer is asked in degrees")
-    if abs(value + true_error_deg) <= 2.0 and abs(true_error_deg) > 2.0:
-        raise NotYet(f"{value:.1f} deg has the wrong sign: the returns sit turned the "
-                     f"other way round the lidar")
-    expect(abs(value - true_error_deg) <= 2.0,
-           f"{value:.1f} deg is not it: turn the scan's returns about the lidar until they "
-           f"lie on the static walls; the turn that fits best is the error")
-    return f"{value:.1f} deg; the scan was built {true_error_deg:.1f} deg off"
+def scan_yaw_check(fn: Callable[[Costmap, Costmap, np.ndarray], float]) -> str:
+    """``fn(marks, static, lidar_xy)`` says by how many degrees the mount yaw was wrong
+    (sign included), on the notebook's evidence and on two cases it never shows."""
+    found = []
+    for case, (_, true_error_deg) in enumerate(MYSTERY_CASES):
+        marks, static, lidar_xy = mystery_scan(case)
+        value = fn(marks, static, lidar_xy.copy())
+        expect(isinstance(value, (int, float, np.integer, np.floating))
+               and math.isfinite(value),
+               f"scan_yaw_error() gave {format_value(value)}; write the angle in degrees")
+        where = "the notebook's scan" if case == 0 else f"a scan you have not seen ({case})"
+        if abs(value - math.radians(true_error_deg)) < 0.02:
+            raise NotYet(f"on {where}: that looks like radians; the answer is asked in degrees")
+        if abs(value + true_error_deg) <= 2.0:
+            raise NotYet(f"on {where}: {value:.1f} deg has the wrong sign: the returns sit "
+                         "turned the other way round the lidar")
+        expect(abs(value - true_error_deg) <= 2.0,
+               f"on {where}: {value:.1f} deg is not it: turn the scan's returns about the "
+               "lidar until they lie on the static walls; the turn that fits best is the "
+               "error (work it out from the layers handed in, not a number written down)")
+        found.append(float(value))
+    return (f"{found[0]:.1f} deg; the scan was built {MYSTERY_CASES[0][1]:.1f} deg off (and "
+            f"{len(found) - 1} scans you had not seen found too)")
 
 
 # --- exercise 4: design ----------------------------------------------------------------

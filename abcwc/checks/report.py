@@ -11,8 +11,10 @@ A check never raises: an unwritten exercise (the stub still raises
 "not yet", so an untouched student notebook runs to the end. Later cells then call
 :func:`use_or_fallback` to carry on with the library's own implementation.
 
-The printed text is plain and deterministic, because the course's CI (nbval) compares
-the outputs stored in ``solutions/`` with a fresh run.
+The line is plain and deterministic, because the course's CI (nbval) compares the
+outputs stored in ``solutions/`` with a fresh run. In a notebook it is shown as rich
+output as well: a pass in green, a "not yet" in bold orange (:meth:`CheckResult.html`),
+with the same plain line as the text fallback; elsewhere (a script, a test) it is printed.
 
 Writing a chapter check (``abcwc/checks/chNN.py``)::
 
@@ -29,9 +31,18 @@ Writing a chapter check (``abcwc/checks/chNN.py``)::
 from __future__ import annotations
 
 import functools
+import html
+import inspect
+import linecache
 import math
-from collections.abc import Callable, Mapping
+import os
+import re
+import sys
+import sysconfig
+import types
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, ParamSpec, TypeVar
 
 import numpy as np
@@ -89,6 +100,17 @@ class CheckResult:
         status = PASS if self.passed else NOT_YET
         return f"{status} — {self.name}: {self.message}"
 
+    def html(self) -> str:
+        """The line as HTML: a pass in green, a "not yet" in bold orange."""
+        colour, weight = ("#1a7f37", "normal") if self.passed else ("#b35900", "bold")
+        status = PASS if self.passed else NOT_YET
+        return (f'<pre style="margin:0"><span style="color:{colour};font-weight:{weight}">'
+                f"{html.escape(status)}</span> — {html.escape(self.name)}: "
+                f"{html.escape(self.message)}</pre>")
+
+    def _repr_html_(self) -> str:
+        return self.html()
+
     def __bool__(self) -> bool:
         return self.passed
 
@@ -138,13 +160,72 @@ def check(
     except NotImplementedError as exc:
         result = CheckResult(name, False, _not_written(exc, args))
     except Exception as exc:  # noqa: BLE001 - student code may raise anything
-        detail = _one_line(str(exc))
-        raised = type(exc).__name__ + (f": {detail}" if detail else "")
-        result = CheckResult(name, False, f"your code raised {raised}")
+        result = CheckResult(name, False, _raised(exc))
     else:
         result = CheckResult(name, True, _one_line(message) if message else "ok")
-    print(result.line)
+    _show(result)
     return result
+
+
+def _show(result: CheckResult) -> None:
+    """Show the result's line: as HTML with a plain-text fallback in a notebook's kernel,
+    printed anywhere else."""
+    shell = sys.modules.get("IPython") and sys.modules["IPython"].get_ipython()
+    if shell is None or not hasattr(shell, "kernel"):
+        print(result.line)
+        return
+    from IPython.display import display
+
+    sys.stdout.flush()  # what the check printed before stays above its line
+    display({"text/plain": result.line, "text/html": result.html()}, raw=True)
+
+
+_LIBRARY_DIRS = tuple(
+    str(Path(path).resolve()) + os.sep
+    for path in {sysconfig.get_paths()[key] for key in ("stdlib", "platstdlib", "purelib",
+                                                        "platlib")}
+) + (str(Path(__file__).resolve().parents[1]) + os.sep,)
+_CELL_FILE = re.compile(r"(ipykernel_\d+[/\\]\d+\.py|<ipython-input-[\d-]+.*>)$")
+
+
+def _raised(exc: BaseException) -> str:
+    """``your code raised <Type>: <message> (line <n>: <source>)``: the line is the last one
+    in the traceback that is the student's own (not abcwc's, Python's or a package's)."""
+    detail = _one_line(str(exc))
+    if len(detail) > 160:
+        detail = detail[:159] + "…"
+    raised = type(exc).__name__ + (f": {detail}" if detail else "")
+    where = _student_line(exc)
+    return f"your code raised {raised}" + (f" ({where})" if where else "")
+
+
+def _student_line(exc: BaseException) -> str:
+    """Where in the student's code ``exc`` was raised: ``line 3: return x + 1`` in a
+    notebook cell, ``line 3 of name.py: return x + 1`` in a file; "" when no frame of the
+    traceback is the student's."""
+    found = ""
+    tb = exc.__traceback__
+    while tb is not None:
+        filename = tb.tb_frame.f_code.co_filename
+        if not filename.startswith("<frozen") and not _is_library(filename):
+            lineno = tb.tb_lineno
+            source = " ".join(linecache.getline(filename, lineno).split())
+            if len(source) > 80:
+                source = source[:79] + "…"
+            place = (f"line {lineno}" if _CELL_FILE.search(filename)
+                     else f"line {lineno} of {Path(filename).name}")
+            found = f"{place}: {source}" if source else place
+        tb = tb.tb_next
+    return found
+
+
+def _is_library(filename: str) -> bool:
+    """Whether ``filename`` is abcwc's, Python's own or an installed package's."""
+    try:
+        resolved = str(Path(filename).resolve())
+    except (OSError, ValueError):
+        return False
+    return resolved.startswith(_LIBRARY_DIRS)
 
 
 def _not_written(exc: NotImplementedError, args: tuple) -> str:
@@ -239,13 +320,127 @@ def expect(condition: bool, message: str) -> None:
 
 
 def expect_own(fn: Callable[..., Any], *library_fns: Callable[..., Any]) -> None:
-    """Refuse a function of abcwc's own (the library's, or a check's ``reference_*``)
-    handed to a check in place of the student's: ``that is abcwc's own <name>: write
-    yours``."""
+    """Refuse a function of abcwc's own handed to a check in place of the student's:
+    ``that is abcwc's own <name>: write yours``.
+
+    The library's own is any function defined in abcwc, and ``library_fns``: the
+    exercise's own implementations (the library's function and the check's
+    ``reference_*``). ``fn`` is refused when
+
+    - it is one of them, also inside ``functools.partial``, a bound method or a
+      ``functools.wraps`` wrapper;
+    - it reaches one of ``library_fns``: a lambda, closure or function of the student's
+      whose code names it (through its globals, its closure cells, its defaults or a
+      module attribute such as ``abcwc.slam.biggest_correction``), directly or through
+      another function of the student's.
+
+    A student's function that calls *other* abcwc functions (helpers the exercise allows,
+    such as ``wrap_angle``) is the student's own and passes.
+    """
+    bare = _unwrapped(fn)
+    if _is_own(bare, library_fns):
+        raise NotYet(f"that is abcwc's own {_name(bare)}: write yours")
+    own = {id(_unwrapped(other)) for other in library_fns}
+    if not own:
+        return
+    for reached in _reached(fn):
+        if id(reached) in own:
+            raise NotYet(f"that calls abcwc's own {_name(reached)}: write yours")
+
+
+def _is_own(fn: Any, library_fns: tuple[Callable[..., Any], ...]) -> bool:
     module = getattr(fn, "__module__", None) or ""
-    if any(fn is other for other in library_fns) or module == "abcwc" \
-            or module.startswith("abcwc."):
-        raise NotYet(f"that is abcwc's own {_name(fn)}: write yours")
+    return (any(fn is _unwrapped(other) for other in library_fns)
+            or module == "abcwc" or module.startswith("abcwc."))
+
+
+def _unwrapped(fn: Any) -> Any:
+    """``fn`` without ``functools.partial``, bound-method and ``functools.wraps`` layers."""
+    seen: set[int] = set()
+    while id(fn) not in seen:
+        seen.add(id(fn))
+        if isinstance(fn, functools.partial):
+            fn = fn.func
+        elif isinstance(fn, types.MethodType):
+            fn = fn.__func__
+        elif getattr(fn, "__wrapped__", None) is not None:
+            fn = fn.__wrapped__
+        else:
+            break
+    return fn
+
+
+def _reached(fn: Any) -> Iterator[Any]:
+    """Every object the student's ``fn`` can call into: the layers it is wrapped in, the
+    arguments a partial holds, and for each function of the student's (not abcwc's, not
+    Python's or an installed package's) the objects its code names (globals and module
+    attributes), its closure cells and its defaults, followed through the student's own
+    functions."""
+    pending, seen = [fn], set()
+    while pending:
+        item = pending.pop()
+        if id(item) in seen:
+            continue
+        seen.add(id(item))
+        yield item
+        if isinstance(item, functools.partial):
+            pending += [item.func, *item.args, *item.keywords.values()]
+        elif isinstance(item, types.MethodType):
+            pending.append(item.__func__)
+        elif isinstance(item, types.FunctionType) and not _is_own(item, ()) \
+                and not _is_library(item.__code__.co_filename):
+            pending += _named_by(item)
+        elif getattr(item, "__wrapped__", None) is not None:
+            pending.append(item.__wrapped__)
+
+
+def _named_by(fn: types.FunctionType) -> list[Any]:
+    """The objects ``fn``'s code (nested functions and lambdas included) refers to."""
+    names: set[str] = set()
+    codes = [fn.__code__]
+    while codes:
+        code = codes.pop()
+        names.update(code.co_names)
+        codes += [const for const in code.co_consts if isinstance(const, types.CodeType)]
+    found = [fn.__globals__[name] for name in names if name in fn.__globals__]
+    found += [cell.cell_contents for cell in fn.__closure__ or ()
+              if _has_contents(cell)]
+    found += list(fn.__defaults__ or ()) + list((fn.__kwdefaults__ or {}).values())
+    owners = [item for item in found if _is_abcwc_owner(item)]
+    seen_owners: set[int] = set()
+    while owners:  # abcwc.mapping.slam.run_slam, OccupancyGrid.integrate: attributes the
+        owner = owners.pop()  # code names, of abcwc's modules and classes
+        if id(owner) in seen_owners:
+            continue
+        seen_owners.add(id(owner))
+        for name in names:
+            value = inspect.getattr_static(owner, name, None)
+            value = value.__func__ if isinstance(value, (staticmethod, classmethod)) else value
+            if _is_abcwc_owner(value):
+                owners.append(value)
+            elif value is not None and not isinstance(value, types.ModuleType):
+                found.append(value)
+    return found
+
+
+def _is_abcwc_owner(item: Any) -> bool:
+    """Whether ``item`` is one of abcwc's modules or classes (whose attributes a student's
+    code may name, as in ``abcwc.mapping.slam.run_slam`` or ``OccupancyGrid.integrate``)."""
+    if isinstance(item, types.ModuleType):
+        name = item.__name__
+    elif isinstance(item, type):
+        name = item.__module__ or ""
+    else:
+        return False
+    return name == "abcwc" or name.startswith("abcwc.")
+
+
+def _has_contents(cell: types.CellType) -> bool:
+    try:
+        cell.cell_contents  # noqa: B018 - an empty cell raises
+    except ValueError:
+        return False
+    return True
 
 
 def expect_equal(got: Any, expected: Any, *, what: str, ref: str | None = None) -> None:

@@ -20,6 +20,7 @@ from abcwc.geometry import wrap_angle
 from abcwc.params import ChairParams
 from abcwc.perception.known_objects import KnownObject, ObjectDetector
 from abcwc.perception.signs import WORD_BOX, house_sign
+from abcwc.sim.colour_camera import Imaging
 
 
 @dataclass(frozen=True)
@@ -61,7 +62,8 @@ def sweep_sign_views(features: str = "sift", shown: str = "EXIT", sought: str = 
                      count: int = 60, seed: int = 0, distances: tuple[float, float] = (1.5, 9.0),
                      max_bearing: float = 0.4, max_turn: float = 1.0,
                      width: float = 0.6, params: ChairParams | None = None,
-                     detector: ObjectDetector | None = None) -> SignSweep:
+                     detector: ObjectDetector | None = None,
+                     imaging: Imaging | None = None) -> SignSweep:
     """Render ``count`` random views of the sign saying ``shown`` (``width`` m wide, its
     centre 1.1-1.3 m up) and look in each for the one saying ``sought`` with SIFT or ORB
     (``features``; or a ``detector`` of one's own), verification reported separately."""
@@ -72,7 +74,7 @@ def sweep_sign_views(features: str = "sift", shown: str = "EXIT", sought: str = 
     image = house_sign(shown)
     rows = []
     for view in random_views(image, width, count, seed, distances, max_bearing, max_turn,
-                             (1.1, 1.3), params):
+                             (1.1, 1.3), params, imaging):
         true_range, true_bearing = view.range_and_bearing(np.array(view.centre[:2]))
         half = width / 2 * np.array([-math.sin(view.facing), math.cos(view.facing)])
         ends = [view.range_and_bearing(np.array(view.centre[:2]) + k * half) for k in (-1, 1)]
@@ -84,7 +86,7 @@ def sweep_sign_views(features: str = "sift", shown: str = "EXIT", sought: str = 
         best = found[0] if found else None
         rows.append((true_range, true_bearing, view.turn, width_px, best is not None,
                      best.correlation if best else math.nan,
-                     bool(best and best.correlation >= detector.min_correlation),
+                     bool(best and best.verified),
                      wrap_angle(best.bearing - true_bearing) if best else math.nan,
                      ms))
     columns = [np.array(c) for c in zip(*rows)]

@@ -164,7 +164,8 @@ def plausible_outline(outline: np.ndarray, image_shape: tuple[int, ...],
 
 
 def region_correlation(view: np.ndarray, homography: np.ndarray, reference: np.ndarray,
-                       box: tuple[int, int, int, int], strips: int = 1) -> float:
+                       box: tuple[int, int, int, int], strips: int = 1,
+                       rows: int = 1) -> float:
     """Normalised cross-correlation (-1..1) of the reference's region ``box`` with the
     same region of ``view`` warped back into the reference's frame through
     ``homography`` (reference to view): the smallest over ``strips`` equal vertical
@@ -186,8 +187,13 @@ def region_correlation(view: np.ndarray, homography: np.ndarray, reference: np.n
         patch = cv2.resize(small, (x1 - x0, y1 - y0), interpolation=cv2.INTER_LINEAR)
     warped = back[y0:y1, x0:x1].astype(np.float64)
     patch = patch.astype(np.float64)
-    edges = np.linspace(0, x1 - x0, int(strips) + 1).round().astype(int)
-    return min(_ncc(warped[:, a:b], patch[:, a:b]) for a, b in zip(edges[:-1], edges[1:]))
+    across = np.linspace(0, x1 - x0, int(strips) + 1).round().astype(int)
+    down = np.linspace(0, y1 - y0, int(rows) + 1).round().astype(int)
+    cells = [(slice(c, d), slice(a, b)) for a, b in zip(across[:-1], across[1:])
+             for c, d in zip(down[:-1], down[1:])]
+    # a cell blank on the reference says nothing here (the margins' check reads blanks)
+    written = [cell for cell in cells if patch[cell].std() > 0.1 * patch.std()] or cells
+    return min(_ncc(warped[cell], patch[cell]) for cell in written)
 
 
 def _ncc(a: np.ndarray, b: np.ndarray) -> float:
@@ -305,7 +311,8 @@ class ObjectDetector:
 
     def __init__(self, objects: list[KnownObject], features: str = "sift",
                  ratio: float = 0.75, ransac_px: float = 4.0, min_inliers: int = 12,
-                 min_correlation: float = 0.7, strips: int = 3, verify: bool = True,
+                 min_correlation: float = 0.6, strips: int = 4, rows: int = 2,
+                 verify: bool = True,
                  reference_widths: tuple[int, ...] | None = None,
                  reference_blur: float = 1.0, min_plate: float = 0.6,
                  max_margin_ink: float = 0.35, seed: int = 0):
@@ -327,6 +334,7 @@ class ObjectDetector:
         self.features = features
         self.ratio, self.ransac_px, self.min_inliers = ratio, ransac_px, int(min_inliers)
         self.min_correlation, self.verify, self.strips = min_correlation, verify, int(strips)
+        self.rows = int(rows)
         self.min_plate, self.max_margin_ink = min_plate, max_margin_ink
         self._detector = make_features(features)
         widths = reference_widths or REFERENCE_WIDTHS[features]
@@ -423,7 +431,7 @@ class ObjectDetector:
             rows, cols = view.shape[:2]
             if ((region >= 0) & (region <= [cols - 1, rows - 1])).all():
                 correlation = region_correlation(view, homography, reference, box,
-                                                 self.strips)
+                                                 self.strips, self.rows)
                 # two of the view's px, in the reference's
                 across = np.hypot(*(region[1] - region[0]))
                 margins = margin_ink(view, homography, reference, box,

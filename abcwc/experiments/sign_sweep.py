@@ -14,6 +14,16 @@ measurement time from a seeded generator (:func:`look_alike_words`), so no thres
 can have been tuned on them: a third of them contain the known word inside a longer one
 (``EXIT`` in ``EXITS`` or ``NEXIT``), the look-alike the old verification let through,
 a third of them change one or two of its letters, the rest are random.
+
+Measured with the default detectors (288 views a condition, seed 28; found %, SIFT /
+ORB): clean 98.3 / 97.9, blur 1.5 px 94.1 / 96.2, exposure x0.4 96.5 / 96.5, exposure
+x1.8 96.2 / 95.8, noise 16 grey levels 97.6 / 97.6, all of these at once 46.2 / 85.1.
+Views of a look-alike reported as the exit: 0 % of those containing EXIT (96 views, 8
+words) for both; 4.17 % over all 24 words for both, every one of them the 12 views of
+ZXIT, whose Z keeps E's top and bottom bars (module notes of
+:mod:`abcwc.perception.known_objects`: what it still misses). The old verification
+(the word read through the matches' homography) reported EXITS as the exit in 48 % of
+SIFT's views.
 """
 
 from __future__ import annotations

@@ -179,7 +179,7 @@ def test_a_longer_word_containing_the_known_one_is_refused(word):
     assert ObjectDetector([EXIT]).detect(view) == []
 
 
-@pytest.mark.parametrize("features,views", [("sift", 20), ("orb", 60)])
+@pytest.mark.parametrize("features,views", [("sift", 12), ("orb", 30)])
 def test_detectors_built_in_either_order_give_identical_results(features, views):
     """FLANN draws its k-d trees (SIFT) and hash tables (ORB) from OpenCV's random
     generator: seeded at construction, two detectors agree on every view whatever was

@@ -7,9 +7,9 @@ import pytest
 
 from abcwc.bench import BENCHMARKS
 
-QUICK = ["costmap", "dwa", "planner", "grid", "correlative", "vision"]
+QUICK = ["costmap", "dwa", "planner", "grid", "correlative"]
 SLOW = ["sim", "ekf", "nees", "posegraph", "carmen", "slam", "notebooks", "navigator",
-        "follow", "speech"]
+        "follow", "speech", "vision"]
 
 
 def test_every_benchmark_is_registered_with_a_description():

@@ -57,23 +57,36 @@ def test_the_sign_range_is_the_pinhole_worked_by_hand():
 
 def test_range_check(capsys):
     fx = 320 / math.tan(math.radians(28.5))
-    assert_pass(ch05.range_check(lambda: fx * 0.6 / 55, 6.3), capsys)
-    assert_not_yet(ch05.range_check(lambda: fx * 0.3 / 55, 6.3), capsys, "height")
+    measured = ch05.sweep_range()
+    assert_pass(ch05.range_check(lambda: fx * 0.6 / 52, measured), capsys)
+    assert_not_yet(ch05.range_check(lambda: fx * 0.3 / 52, measured), capsys, "height")
     whole = 320 / math.tan(math.radians(57))  # the whole field in the tangent
-    assert_not_yet(ch05.range_check(lambda: whole * 0.6 / 55, 6.3), capsys, "half the field")
+    assert_not_yet(ch05.range_check(lambda: whole * 0.6 / 52, measured), capsys,
+                   "half the field")
     wide = 640 / math.tan(math.radians(28.5))  # the whole width over the half angle
-    assert_not_yet(ch05.range_check(lambda: wide * 0.6 / 55, 6.3), capsys, "twice too long")
-    assert_not_yet(ch05.range_check(lambda: 1.5, 6.3), capsys, "50-60")
-    assert_not_yet(ch05.range_check(lambda: "far", 6.3), capsys, "one distance")
-    assert_not_yet(ch05.range_check(not_written, 6.3), capsys, "NotImplementedError")
+    assert_not_yet(ch05.range_check(lambda: wide * 0.6 / 52, measured), capsys,
+                   "twice too long")
+    assert_not_yet(ch05.range_check(lambda: 1.5, measured), capsys, "45-60")
+    assert_not_yet(ch05.range_check(lambda: "far", measured), capsys, "one distance")
+    assert_not_yet(ch05.range_check(not_written, measured), capsys, "NotImplementedError")
+
+
+def test_range_check_checks_the_measured_range_against_the_sweep(capsys):
+    """A measured range typed in (or the wrong sweep's) is not the sweep's: the check runs
+    the notebook's sweep itself and says so, whatever the prediction."""
+    truth = ch05.sweep_range()
+    assert 1.5 < truth < 9.0  # a view of the 1.5-9 m sweep
+    assert_not_yet(ch05.range_check(lambda: 6.3, 0.0), capsys, "the sweep (SIFT")
+    assert_not_yet(ch05.range_check(lambda: 6.3, truth + 0.5), capsys, f"{truth:.2f} m")
+    assert_not_yet(ch05.range_check(lambda: 6.3, math.nan), capsys, "farthest")
 
 
 def test_threshold_check_passes_a_threshold_read_off_the_plot(capsys):
-    assert_pass(ch05.threshold_check(lambda: 0.7), capsys)
+    assert_pass(ch05.threshold_check(lambda: 0.45), capsys)
 
 
 @pytest.mark.parametrize(("wrong", "fragment"), [
-    (lambda: 0.4, "LIFT"),  # just above the STAIRS sign the notebook showed: LIFT passes
+    (lambda: 0.05, "LIFT"),  # just above the STAIRS sign the notebook showed: LIFT passes
     (lambda: 0.0, "look-alikes"),
     (lambda: 0.99, "refused"),
     (lambda: 70, "between -1 and 1"),

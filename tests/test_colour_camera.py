@@ -13,6 +13,7 @@ from abcwc.sim import SimBase
 from abcwc.sim.colour_camera import (
     CEILING_RGB,
     LUMINANCE,
+    Imaging,
     PlanarTarget,
     nearest_cover,
     render_colour,
@@ -145,3 +146,68 @@ def test_bad_camera_input_is_refused_with_what_is_allowed():
         PlanarTarget("sign", np.zeros((4, 4), np.uint8), 0.0, (0, 0, 1), 0.0)
     with pytest.raises(ValueError, match="finite"):
         PlanarTarget("sign", np.zeros((4, 4), np.uint8), 0.2, (0, math.nan, 1), 0.0)
+
+
+def test_each_frame_has_its_own_noise_not_a_shifted_copy():
+    """Two frames of the same still scene from one generator: their noise residuals
+    (frame minus the ideal image) are unrelated at every shift, and have the std asked
+    for."""
+    walls, bands = wall_ahead(3.0)
+    ideal = render(walls, bands, gray=True).astype(np.float32)
+    imaging = Imaging(gain=(1.0, 1.0), blur_sigma=0.0, noise_std=8.0, exposure=0.0)
+    rng = np.random.default_rng(3)
+    first, second = (render_colour(CAMERA, POSE, MOUNT, HEIGHT, walls, bands, NO_PEOPLE, (),
+                                   rng, imaging, gray=True).astype(np.float32) - ideal
+                     for _ in range(2))
+    centre = second[100:380, 100:540]
+    # every shift of up to 100 px: a shifted copy would correlate 1 at one of them
+    best = cv2.matchTemplate(first, centre, cv2.TM_CCOEFF_NORMED).max()
+    assert best < 0.1
+    assert np.std(first[50:-50, 50:-50]) == pytest.approx(8.0, rel=0.05)  # before clipping
+
+
+def edge_width(row: np.ndarray) -> int:
+    """px between 10 % and 90 % of the way from a row's dark to its light level."""
+    low, high = row.min(), row.max()
+    inside = (row > low + 0.1 * (high - low)) & (row < low + 0.9 * (high - low))
+    return int(inside.sum())
+
+
+@pytest.mark.parametrize("turn", [0.0, 0.2, 0.4])
+def test_turning_smears_the_image_sideways_by_the_angle_turned_in_the_exposure(turn):
+    """A black card's vertical edges: sharp without motion, a ramp of fx w T px when
+    the chair turns at w rad/s for T s (a rotation moves the image by fx times the angle
+    turned, whatever the depth)."""
+    card = PlanarTarget("card", np.zeros((40, 40), np.uint8), 0.6, (ORIGIN[0] + 2.0, 0.0, 0.76),
+                        math.pi)
+    walls, bands = wall_ahead(4.0)
+    imaging = Imaging(gain=(1.0, 1.0), blur_sigma=0.0, noise_std=0.0, exposure=0.03)
+    image = render_colour(CAMERA, POSE, MOUNT, HEIGHT, walls, bands, NO_PEOPLE, (card,),
+                          np.random.default_rng(0), imaging, gray=True, motion=(0.0, turn))
+    row = image[int(CAMERA.cy)].astype(float)
+    left_edge = row[: int(CAMERA.cx)]
+    assert edge_width(left_edge) == pytest.approx(0.8 * CAMERA.fx * turn * 0.03, abs=1.5)
+
+
+def test_driving_smears_each_pixel_along_its_path_from_the_principal_point():
+    """Driving at v m/s for T s, a point at depth z and u - cx px off centre moves
+    (u - cx) v T / z px: the edge between a card's black and white halves, well left of
+    centre, smears by that much; the principal point does not move."""
+    halves = np.zeros((400, 400), np.uint8)  # finer than the screen: a sharp edge
+    halves[:, 200:] = 255
+    depth, left = 1.5, 0.4
+    card = PlanarTarget("card", halves, 0.6, (ORIGIN[0] + depth, left, 0.76), math.pi)
+    walls, bands = wall_ahead(4.0)
+    imaging = Imaging(gain=(1.0, 1.0), blur_sigma=0.0, noise_std=0.0, exposure=0.05)
+    still, moving = (render_colour(CAMERA, POSE, MOUNT, HEIGHT, walls, bands, NO_PEOPLE,
+                                   (card,), np.random.default_rng(0), imaging, gray=True,
+                                   motion=(v, 0.0))[int(CAMERA.cy)].astype(float)
+                     for v in (0.0, 1.0))
+    edge = round(CAMERA.cx - CAMERA.fx * left / depth)  # where the halves meet
+    window = slice(edge - 15, edge + 16)
+    expected = (CAMERA.cx - edge) * 1.0 * 0.05 / depth
+    assert edge_width(still[window]) <= 1
+    assert edge_width(moving[window]) == pytest.approx(0.8 * expected, abs=1.5)
+    assert moving[int(CAMERA.cx)] == pytest.approx(still[int(CAMERA.cx)])
+    with pytest.raises(ValueError, match="exposure"):
+        Imaging(exposure=-0.01)

@@ -11,11 +11,19 @@ import pytest
 from abcwc.behaviours.base import Status
 from abcwc.behaviours.find_sign import SignSeeker
 from abcwc.behaviours.navigator import Navigator
-from abcwc.experiments.sign_sweep import sweep_sign_views
+from abcwc.experiments.sign_sweep import (
+    CONDITIONS,
+    LAB_GEOMETRY,
+    look_alike_words,
+    sweep_sign_views,
+)
+from abcwc.experiments.views import random_views
 from abcwc.geometry import compose
 from abcwc.perception.known_objects import (
     KnownObject,
     ObjectDetector,
+    blank_margins,
+    fit_plate,
     plausible_outline,
     ratio_test,
     region_correlation,
@@ -79,12 +87,14 @@ def test_an_outline_must_be_a_convex_quadrilateral_in_the_references_order():
     assert not plausible_outline(dart, (480, 640))
 
 
-def place_sign(homography, size=(640, 480), seed=0):
-    """The EXIT sign warped into a grey view by ``homography`` over a noisy wall."""
+def place_sign(homography, size=(640, 480), seed=0, word="EXIT"):
+    """The sign saying ``word`` warped into a grey view by ``homography`` over a noisy
+    wall."""
     rng = np.random.default_rng(seed)
     wall = np.full((size[1], size[0]), 170, np.uint8)
-    sign = cv2.warpPerspective(EXIT.gray, homography, size)
-    mask = cv2.warpPerspective(np.full(EXIT.gray.shape, 255, np.uint8), homography, size)
+    gray = cv2.cvtColor(house_sign(word), cv2.COLOR_RGB2GRAY)
+    sign = cv2.warpPerspective(gray, homography, size)
+    mask = cv2.warpPerspective(np.full(gray.shape, 255, np.uint8), homography, size)
     view = np.where(mask > 127, sign, wall).astype(float)
     return np.clip(view + rng.normal(0, 2.0, view.shape), 0, 255).astype(np.uint8)
 
@@ -120,6 +130,96 @@ def test_the_word_region_tells_the_look_alike_apart():
     assert region_correlation(stairs, np.eye(3), gray, WORD_BOX) < 0.5
 
 
+def test_the_blank_margins_are_where_the_word_is_not_written():
+    """The reference's blank columns beside the word: from the box's edges to where
+    OpenCV's own measure of the text (getTextSize, as house_sign centres it) begins and
+    ends, to within the font's side bearing."""
+    x0, y0, x1, y1 = WORD_BOX
+    (width, height), _ = cv2.getTextSize("EXIT", cv2.FONT_HERSHEY_DUPLEX, 1.0, 5)
+    scale = min((x1 - x0) / width, (y1 - y0) / height) * 0.92
+    (width, _), _ = cv2.getTextSize("EXIT", cv2.FONT_HERSHEY_DUPLEX, scale, 5)
+    start = x0 + ((x1 - x0) - width) // 2
+    (left, left_end), (right_start, right) = blank_margins(EXIT.gray, WORD_BOX)
+    assert (left, right) == (x0, x1)
+    assert left_end == pytest.approx(start, abs=8)
+    assert right_start == pytest.approx(start + width, abs=8)
+
+
+def test_the_plate_fit_finds_the_true_homography_from_a_rough_one():
+    """Started 12 px off at every corner, the ECC fit of the plate (the word masked out)
+    lands within a pixel of the homography the view was drawn with."""
+    width, height = SIGN_SIZE
+    corners = np.float32([[0, 0], [width - 1, 0], [width - 1, height - 1], [0, height - 1]])
+    true = np.float32([[210, 140], [400, 160], [395, 258], [212, 246]])
+    rough = true + np.float32([[12, -12], [-12, 12], [12, 12], [-12, -12]])
+    view = place_sign(cv2.getPerspectiveTransform(corners, true))
+    mask = np.full(EXIT.gray.shape, 255, np.uint8)
+    x0, y0, x1, y1 = WORD_BOX
+    mask[y0:y1, x0:x1] = 0
+    score, fitted = fit_plate(view, cv2.getPerspectiveTransform(corners, rough), EXIT.gray,
+                              mask)
+    assert score > 0.9
+    assert np.abs(cv2.perspectiveTransform(corners[None], fitted)[0] - true).max() < 1.0
+
+
+@pytest.mark.parametrize("word", ["EXITS", "NEXIT", "EXITING"])
+def test_a_longer_word_containing_the_known_one_is_refused(word):
+    """Steps 1-4 match the letters the two words share; read through that fit the word
+    strip would say EXIT. Fitted again from the plate's own pixels, the outline is
+    the sign's (within 8 px of 320; the letters' fit is some 20 px off), and there the
+    word and the margins beside it say it is not EXIT."""
+    width, height = SIGN_SIZE
+    corners = np.float32([[0, 0], [width - 1, 0], [width - 1, height - 1], [0, height - 1]])
+    true = np.float32([[150, 120], [470, 140], [465, 300], [152, 285]])
+    view = place_sign(cv2.getPerspectiveTransform(corners, true), word=word)
+    found = ObjectDetector([EXIT], verify=False).detect(view)
+    assert found and not found[0].verified
+    assert np.abs(found[0].outline - true).max() < 8.0  # the plate fit: the true outline
+    assert found[0].correlation < 0.5 or found[0].margins > 0.35
+    assert ObjectDetector([EXIT]).detect(view) == []
+
+
+@pytest.mark.parametrize("features,views", [("sift", 12), ("orb", 30)])
+def test_detectors_built_in_either_order_give_identical_results(features, views):
+    """FLANN draws its k-d trees (SIFT) and hash tables (ORB) from OpenCV's random
+    generator: seeded at construction, two detectors agree on every view whatever was
+    built or drawn in between."""
+    def outcomes(detector):
+        return [[(d.inliers, d.verified, np.round(d.outline, 6).tolist(),
+                  None if math.isnan(d.correlation) else round(d.correlation, 9))
+                 for d in detector.detect(v.gray)] for v in shots]
+
+    shots = list(random_views(house_sign("EXIT"), 0.6, views, 100, (1.5, 4.0), 0.4,
+                              math.radians(40), (1.1, 1.3),
+                              imaging=CONDITIONS["blur 1.5 px"]))
+    first = ObjectDetector([EXIT], features=features)
+    lift = KnownObject("lift", house_sign("LIFT"), 0.6, WORD_BOX)
+    ObjectDetector([lift, EXIT], features=features, seed=7)  # draws from the generator
+    cv2.randu(np.zeros((64, 64)), 0, 1)
+    second = ObjectDetector([EXIT], features=features)
+    assert outcomes(second) == outcomes(first)
+    assert sum(bool(o) for o in outcomes(first)) > views // 2
+
+
+@pytest.mark.parametrize("condition", ["blur 1.5 px", "exposure x1.8"])
+def test_sift_holds_under_blur_and_bright_light(condition):
+    """Nine views in ten of the real sign found at 1.5 px blur and with whites clipped
+    (the full assessment, experiments.sign_sweep.rates, is in abcwc bench vision)."""
+    sweep = sweep_sign_views(count=20, seed=31, imaging=CONDITIONS[condition],
+                             detector=ObjectDetector([EXIT]), **LAB_GEOMETRY)
+    assert sweep.verified.mean() >= 0.9
+
+
+def test_look_alike_words_are_made_fresh_and_never_the_known_word():
+    words = look_alike_words("EXIT", 24, 3)
+    assert len(set(words)) == 24 and "EXIT" not in words
+    assert all(1 <= len(w) <= 8 and w.isalpha() and w.isupper() for w in words)
+    assert sum("EXIT" in w for w in words) == 8  # a third contain it
+    assert look_alike_words("EXIT", 24, 3) == words != look_alike_words("EXIT", 24, 4)
+    with pytest.raises(ValueError, match="1-6 letters"):
+        look_alike_words("EMERGENCY", 3, 0)
+
+
 @pytest.fixture(scope="module")
 def sweeps():
     return {(f, shown): sweep_sign_views(f, shown, count=50, seed=4)
@@ -134,9 +234,11 @@ def test_sift_finds_the_sign_across_the_room_with_its_bearing(sweeps):
     assert sift.rate(sift.verified, (1.5, 4.0), math.radians(45)) >= 0.9
     assert sift.farthest(sift.verified) > 5.0
     assert np.nanmax(np.abs(sift.bearing_error)) < math.radians(0.5)
-    # the true sign is hardly ever refused (a homography from a dozen inliers can be
-    # too rough to read the word through)
-    assert sift.verified.sum() >= 0.9 * sift.matched.sum()
+    # within 4.5 m the true sign is hardly ever refused; beyond 5 m the word spans
+    # under 40 px and its 4 x 2 cells blur into each other (the reference's smaller
+    # sizes still match it there)
+    near = sift.distance < 4.5
+    assert sift.verified[near].sum() >= 0.9 * sift.matched[near].sum()
 
 
 def test_orb_trades_range_for_speed(sweeps):
@@ -155,15 +257,15 @@ def test_a_look_alike_passes_matching_and_ransac_but_not_verification(sweeps, fe
     assert not stairs.verified.any()
 
 
-def test_a_word_with_letters_in_common_needs_the_strips():
-    """LIFT shares EXIT's font, length and two letters: as one region it correlates
-    about as well as a true view, strip by strip it does not."""
+def test_a_word_with_letters_in_common_needs_the_cells():
+    """LIFT shares EXIT's font, length and two letters: as one region it correlates over
+    0.5, most of the way to a true view; in 4 x 2 cells, letter by letter, it does not."""
     lift = sweep_sign_views("sift", "LIFT", count=20, seed=9, distances=(1.5, 4.0))
     assert lift.matched.sum() >= 5 and not lift.verified.any()
-    one_region = ObjectDetector([EXIT], strips=1, verify=False)
+    one_region = ObjectDetector([EXIT], strips=1, rows=1, verify=False)
     whole = sweep_sign_views(detector=one_region, shown="LIFT", count=20, seed=9,
                              distances=(1.5, 4.0))
-    assert np.nanmax(whole.correlation) > 0.6 > np.nanmax(lift.correlation)
+    assert np.nanmax(whole.correlation) > 0.5 > 0.3 > np.nanmax(lift.correlation)
 
 
 def run_seeker(start, vantage=(), seconds=90.0):

@@ -19,7 +19,7 @@ import numpy as np
 from abcwc.geometry import compose, wrap_angle
 from abcwc.params import ChairParams, default_params
 from abcwc.perception.camera import PinholeCamera
-from abcwc.sim.colour_camera import PlanarTarget, render_colour
+from abcwc.sim.colour_camera import Imaging, PlanarTarget, render_colour
 from abcwc.sim.world import box_world
 from abcwc.types import Pose2D
 
@@ -47,9 +47,10 @@ class TargetView:
 
 def random_views(image: np.ndarray, width: float, count: int, seed: int,
                  distances: tuple[float, float], max_bearing: float, max_turn: float,
-                 heights: tuple[float, float], params: ChairParams | None = None
-                 ) -> Iterator[TargetView]:
-    """``count`` views of a target showing ``image``, ``width`` m wide (module notes)."""
+                 heights: tuple[float, float], params: ChairParams | None = None,
+                 imaging: Imaging | None = None) -> Iterator[TargetView]:
+    """``count`` views of a target showing ``image``, ``width`` m wide (module notes),
+    each frame departing from the ideal as ``imaging`` says (the camera's default)."""
     p = params or default_params()
     camera = PinholeCamera.from_fov(640, 480, p.depth_scan.fov_deg, p.depth_scan.vertical_fov_deg)
     room = box_world(24.0, 24.0)
@@ -67,7 +68,7 @@ def random_views(image: np.ndarray, width: float, count: int, seed: int,
         target = PlanarTarget("target", image, width, centre, facing)
         gray = render_colour(camera, pose, p.depth_scan.mount, p.depth_scan.height,
                              room.walls, room.bands, np.zeros((0, 3)), (target,), rng,
-                             gray=True)
+                             imaging=imaging, gray=True)
         yield TargetView(gray, camera, origin, heading, centre, facing, turn)
 
 

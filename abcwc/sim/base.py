@@ -340,15 +340,19 @@ class SimBase(BodyMixin):
             for m in self.world.markers)
 
     def render_camera(self, rng: bool = True) -> CameraImage:
-        """What the colour camera sees now (with the frame's lighting, blur and noise
-        drawn from the seeded generator; the ideal image with ``rng`` False)."""
+        """What the colour camera sees now (with the frame's lighting, blur, noise and
+        the motion blur of the chair's own motion, drawn from the seeded generator; the
+        ideal image with ``rng`` False)."""
         p, w, camera = self.params, self.world, self.camera
+        body = self.chair
+        ahead = (body.velocity.x * math.cos(body.angle) + body.velocity.y * math.sin(body.angle))
         targets = self._wall_targets + tuple(
             t for t in (walker.tag_target() for walker in self.walkers) if t is not None)
         pixels = render_colour(camera, self.pose, p.depth_scan.mount, p.depth_scan.height,
                                w.walls, w.bands, circles_of(self.walkers), targets,
                                self._camera_rng if rng else None,
-                               gray=self.camera_mode == "gray")
+                               gray=self.camera_mode == "gray",
+                               motion=(ahead, body.angular_velocity))
         return CameraImage(pixels, camera.fx, camera.fy, camera.cx, camera.cy, self.t)
 
     def _make_frame(self, gyro_z: float) -> SensorFrame:

@@ -24,16 +24,23 @@ behind it: its depth along the ray, ``z = (n . p0) / (n . d)`` for the plane thr
 and people hide it as they should. A target seen from behind is not drawn.
 
 **Imaging**: each frame gets a lighting gain drawn from :attr:`Imaging.gain` (rooms and
-exposure differ), a Gaussian blur of :attr:`Imaging.blur_sigma` px (focus and motion)
-and Gaussian noise of :attr:`Imaging.noise_std` grey levels, all from the seeded
-generator the caller passes.
+exposure differ), a Gaussian blur of :attr:`Imaging.blur_sigma` px (focus), motion blur
+and Gaussian noise of :attr:`Imaging.noise_std` grey levels, fresh for every frame, all
+from the seeded generator the caller passes. **Motion blur** is the image's motion
+during the exposure (:attr:`Imaging.exposure` s) while the chair moves at ``motion``
+(v m/s ahead, w rad/s left): turning sweeps every pixel sideways by ``fx w T`` px
+whatever its depth (a pure rotation moves the image by the angle turned), so the frame
+is smeared along a horizontal line that long; driving ahead moves each pixel away from
+the principal point by ``(p - c) v T / z`` px for a surface ``z`` m ahead (the image of
+a point at depth z scales as 1/z), so the frame is averaged over samples along each
+pixel's own path. At 0.4 rad/s and 30 ms that is 7 px; at 0.5 m/s a sign 2 m ahead and
+200 px off centre moves 1.5 px.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -107,12 +114,22 @@ class PlanarTarget:
 @dataclass(frozen=True)
 class Imaging:
     """How a frame departs from the ideal: a lighting gain drawn uniformly from
-    ``gain``, a Gaussian blur of ``blur_sigma`` px and noise of ``noise_std`` grey
-    levels."""
+    ``gain``, a Gaussian blur of ``blur_sigma`` px, fresh noise of ``noise_std`` grey
+    levels, and the motion blur of an ``exposure`` s long (module notes; 0: none)."""
 
     gain: tuple[float, float] = (0.8, 1.15)
     blur_sigma: float = 0.7
     noise_std: float = 3.0
+    exposure: float = 0.03
+
+    def __post_init__(self) -> None:
+        low, high = self.gain
+        if not (0 < low <= high and math.isfinite(high)):
+            raise ValueError(f"gain must be (low, high) with 0 < low <= high, got {self.gain}")
+        for name in ("blur_sigma", "noise_std", "exposure"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
 
 
 def world_to_optical(points: np.ndarray, origin: np.ndarray, heading: float,
@@ -130,12 +147,14 @@ def render_colour(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float
                   height: float, segments: np.ndarray, bands: np.ndarray,
                   circles: np.ndarray, targets: tuple[PlanarTarget, ...] = (),
                   rng: np.random.Generator | None = None, imaging: Imaging | None = None,
-                  max_range: float = 30.0, gray: bool = False) -> np.ndarray:
+                  max_range: float = 30.0, gray: bool = False,
+                  motion: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
     """The RGB image (height x width x 3, uint8) of a camera at ``height`` m on the chair
     at ``pose``, mounted at ``mount`` (x, y, yaw in base_link), seeing wall
     ``segments`` (N, 4) standing between ``bands`` (N, 2), people ``circles`` (M, 3),
     the floor and ``targets`` (module notes). With ``rng``, the frame gets
-    ``imaging``'s lighting, blur and noise; without, it is the ideal image. With
+    ``imaging``'s lighting, blur, noise and the motion blur of the chair moving at
+    ``motion`` (v m/s ahead, w rad/s left); without, it is the ideal image. With
     ``gray``, the image is (height x width) luminance (ITU-R BT.601, as OpenCV's
     RGB2GRAY), at a third of the cost."""
     sensor = compose(pose, mount)  # x, y, heading in the world
@@ -180,10 +199,15 @@ def render_colour(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float
     np.copyto(image, background[:, None], where=(shown < 0).reshape(
         *shown.shape, *(1,) * (background.ndim - 1)))
     depth = SceneDepth(shown, z_near.astype(np.float32), floor_z.astype(np.float32))
+    imaging = imaging or Imaging()
+    driving = rng is not None and imaging.exposure > 0 and motion[0] != 0
+    # each pixel's depth, targets included, for the blur of driving ahead
+    z_image = depth.box(0, camera.height, 0, camera.width) if driving else None
     for target in sorted(targets, key=lambda t: -_distance(t, origin)):
-        _draw_target(image, depth, camera, target, origin, heading, height)
+        _draw_target(image, depth, camera, target, origin, heading, height, z_image)
     if rng is not None:
-        image = _imaging(image, rng, imaging or Imaging())
+        image = motion_blur(image, camera, z_image, *motion, imaging.exposure)
+        image = _imaging(image, rng, imaging)
     return np.clip(image, 0, 255).astype(np.uint8)
 
 
@@ -249,8 +273,9 @@ def _distance(target: PlanarTarget, origin: np.ndarray) -> float:
 
 def _draw_target(image: np.ndarray, depth: SceneDepth, camera: PinholeCamera,
                  target: PlanarTarget, origin: np.ndarray, heading: float,
-                 height: float) -> None:
-    """Warp ``target`` into ``image`` where it is in front of ``depth`` (module notes)."""
+                 height: float, z_image: np.ndarray | None = None) -> None:
+    """Warp ``target`` into ``image`` where it is in front of ``depth`` (module notes),
+    and write its depth into ``z_image`` (each pixel's depth) where one is given."""
     to_camera = np.array([origin[0] - target.centre[0], origin[1] - target.centre[1]])
     if to_camera @ [math.cos(target.facing), math.sin(target.facing)] <= 0.0:
         return  # seen from behind
@@ -298,34 +323,57 @@ def _draw_target(image: np.ndarray, depth: SceneDepth, camera: PinholeCamera,
     visible = (mask > 0) & (plane_z > 0) & (plane_z <= depth.box(top, bottom, left, right) + 0.02)
     region = image[top:bottom, left:right]
     region[visible] = warped[visible]
+    if z_image is not None:
+        z_image[top:bottom, left:right][visible] = plane_z[visible]
+
+
+def motion_blur(image: np.ndarray, camera: PinholeCamera, depth: np.ndarray | None,
+                v: float, w: float, exposure: float, max_samples: int = 9) -> np.ndarray:
+    """``image`` smeared by the camera's motion during ``exposure`` s, moving ``v`` m/s
+    ahead and turning ``w`` rad/s (module notes): sideways along a line of ``fx w T`` px
+    for the turn, and for driving along each pixel's path from the principal point
+    (sampled every px or so, at most ``max_samples`` times), given each pixel's
+    ``depth`` (m along the optical axis; needed only to drive)."""
+    if exposure <= 0:
+        return image
+    image = np.asarray(image, np.float32)
+    along = float(v) * exposure  # m driven during the exposure
+    if abs(along) > 1e-4:
+        if depth is None:
+            raise ValueError("the blur of driving ahead needs each pixel's depth")
+        rows, cols = image.shape[:2]
+        z = depth
+        with np.errstate(divide="ignore", invalid="ignore"):
+            grow = np.where(np.isfinite(z) & (z > 0.05), along / z, 0.0).astype(np.float32)
+        u, vv = np.meshgrid(np.arange(cols, dtype=np.float32),
+                            np.arange(rows, dtype=np.float32))
+        du, dv = (u - np.float32(camera.cx)) * grow, (vv - np.float32(camera.cy)) * grow
+        longest = float(np.hypot(du, dv).max())
+        samples = int(np.clip(math.ceil(longest) + 1, 3, max_samples))
+        total = np.zeros_like(image)
+        for t in np.linspace(-0.5, 0.5, samples, dtype=np.float32):
+            total += cv2.remap(image, u + t * du, vv + t * dv, cv2.INTER_LINEAR,
+                               borderMode=cv2.BORDER_REPLICATE)
+        image = total / np.float32(samples)
+    sweep = abs(camera.fx * float(w) * exposure)  # px the turn moves the image
+    if sweep > 0.5:
+        length = 2 * math.ceil(sweep / 2) + 1
+        kernel = np.zeros((1, length), np.float32)
+        # a box of `sweep` px, its two end taps shared so the length is exact
+        kernel[0] = np.clip(sweep / 2 + 0.5 - np.abs(np.arange(length) - length // 2), 0, 1)
+        image = cv2.filter2D(image, -1, kernel / kernel.sum(), borderType=cv2.BORDER_REPLICATE)
+    return image
 
 
 def _imaging(image: np.ndarray, rng: np.random.Generator, imaging: Imaging) -> np.ndarray:
-    """Lighting gain, blur and noise (module notes)."""
+    """Lighting gain, blur and fresh noise (module notes)."""
     image = image * np.float32(rng.uniform(*imaging.gain))
     if imaging.blur_sigma > 0:
         image = cv2.GaussianBlur(image, (0, 0), imaging.blur_sigma)
     if imaging.noise_std > 0:
-        bank = _noise_bank(image.shape)
-        dy, dx = rng.integers(0, NOISE_MARGIN, size=2)
-        image += np.float32(imaging.noise_std) * bank[dy:dy + image.shape[0],
-                                                      dx:dx + image.shape[1]]
+        image += np.float32(imaging.noise_std) * rng.standard_normal(image.shape,
+                                                                     dtype=np.float32)
     return image
 
 
-NOISE_MARGIN = 64
-"""px: frames take their noise from a bank this much larger than the image, at a
-random offset (drawing ~10^6 fresh normal numbers a frame would cost more than the
-rest of the rendering)."""
-
-
-@lru_cache(maxsize=4)
-def _noise_bank(shape: tuple[int, ...]) -> np.ndarray:
-    """Unit Gaussian noise (float32) NOISE_MARGIN px larger than ``shape`` each way,
-    the same for every run (seeded)."""
-    rows, cols = shape[0] + NOISE_MARGIN, shape[1] + NOISE_MARGIN
-    return np.random.default_rng(0).standard_normal((rows, cols, *shape[2:]),
-                                                    dtype=np.float32)
-
-
-__all__ = ["Imaging", "PlanarTarget", "render_colour", "world_to_optical"]
+__all__ = ["Imaging", "PlanarTarget", "motion_blur", "render_colour", "world_to_optical"]

@@ -109,10 +109,11 @@ def test_the_marker_s_range_and_bearing_from_the_simulated_camera(sweep):
 
 def test_each_tag_s_reading_range(sweep):
     """Measured, not assumed: a 0.2 m marker is found out to nearly 9 m; its QR code
-    (21 modules of 9.5 mm, about 4 px each at 1.4 m) reads to 1.0-1.5 m, and to 1.8-2.3 m
-    on the image enlarged twice."""
+    (21 modules of 9.5 mm, about 4 px each at 1.4 m, 3 px at 1.8 m) reads to 1.0-1.8 m
+    (with each frame's noise fresh, 1.73 m), and to 1.8-2.3 m on the image enlarged
+    twice."""
     assert sweep.farthest(sweep.found) > 8.0
-    assert 1.0 <= sweep.farthest(sweep.qr) <= 1.5
+    assert 1.0 <= sweep.farthest(sweep.qr) <= 1.8
     assert 1.8 <= sweep.farthest(sweep.qr_upscaled) <= 2.3
-    assert not sweep.qr[sweep.distance > 1.6].any()
+    assert not sweep.qr[sweep.distance > 1.9].any()
     assert sweep.found[sweep.distance < 6.0].mean() > 0.85  # failures: half out of view

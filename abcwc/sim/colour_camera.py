@@ -120,7 +120,7 @@ class Imaging:
     gain: tuple[float, float] = (0.8, 1.15)
     blur_sigma: float = 0.7
     noise_std: float = 3.0
-    exposure: float = 0.03
+    exposure: float = 0.0  # s of motion blur, 0: none (a webcam indoors: about 0.03)
 
     def __post_init__(self) -> None:
         low, high = self.gain

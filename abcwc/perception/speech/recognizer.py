@@ -31,11 +31,16 @@ So each answer is checked twice before the chair obeys it.
 2. **Nothing else was said.** A frame is speech when its energy is 12 dB above the
    utterance's quietest frames; at most ``max_outside_speech`` of the speech frames may
    lie outside the command's words. "stop worrying about it" aligns "stop" to its first
-   word and calls the rest silence; this check refuses it.
+   word and calls the rest silence; this check refuses it. The grammar can also draw a
+   command out over a whole sentence: "I forgot to go to the store" was heard as
+   "drive reverse", with no speech outside it, "reverse" stretched over "go to the
+   store". So no word of the command may last more than ``max_frames_per_phone``
+   frames for each phone of its pronunciation (the dictionary's first; a phone of
+   read speech lasts about 8 frames, 80 ms).
 
-The thresholds (``Verification``) were set on espeak-ng voices and sentences of
-``abcwc.experiments.speech_trials``' tuning set, and are measured on its test set of
-other voices and sentences.
+The thresholds (``Verification``) were set on the tuning speakers and sentences of
+``abcwc.experiments.speech_trials`` (``tuned_verification``), and are measured on its
+held-out speakers and sentences.
 """
 
 from __future__ import annotations
@@ -62,13 +67,17 @@ class Recognition:
     """What was heard: the ``command`` obeyed (None when refused), the grammar's best
     ``phrase`` whether accepted or not, each of its words' log-likelihood ratio per frame
     (``word_llrs``; empty when no command fit), the fraction of the speech outside the
-    command's words, why it was refused (``reason``, "" when accepted) and the decoding
-    time (s)."""
+    command's words, the most frames per phone of any of its words
+    (``frames_per_phone``; 0 when no command fit), each word's frames (``word_frames``),
+    why it was refused (``reason``, ""
+    when accepted) and the decoding time (s)."""
 
     command: SpokenCommand | None
     phrase: str
     word_llrs: tuple[tuple[str, float], ...]
     outside_speech: float
+    frames_per_phone: float
+    word_frames: tuple[int, ...]
     reason: str
     seconds: float
 
@@ -91,20 +100,23 @@ class Recognition:
 class Verification:
     """The thresholds an answer of the grammar must clear (module notes): the words'
     mean log-likelihood ratio per frame (``min_mean_llr``), the weakest word's
-    (``min_word_llr``), a one-word command's (``min_single_word_llr``), and the largest
+    (``min_word_llr``), a one-word command's (``min_single_word_llr``), the largest
     fraction of the speech outside the command's words (``max_outside_speech``; 1.0
-    lets the command be anywhere in the utterance, as a keyword spotter listens).
+    lets the command be anywhere in the utterance, as a keyword spotter listens) and
+    the most frames any word may take per phone (``max_frames_per_phone``; inf turns
+    the check off).
 
-    The defaults were set on the tuning voices and sentences of
-    ``abcwc.experiments.speech_trials`` alone: the most commands recognised with none of
-    its sentences taken for a command (83 % of 60), the strictest such thresholds where
-    several tie. ``Verification.none()`` checks nothing: the grammar's answer as it
-    comes."""
+    The defaults were set by ``speech_trials.tuned_verification`` on the tuning
+    speakers alone (flite's awb and rms, festival's ked, four espeak-ng voices) and
+    their sentences: the most commands recognised with at most 1 % of the sentences
+    taken for a command, the strictest such thresholds where several tie.
+    ``Verification.none()`` checks nothing: the grammar's answer as it comes."""
 
-    min_mean_llr: float = -7.75
-    min_word_llr: float = -8.0
+    min_mean_llr: float = -6.5
+    min_word_llr: float = -8.5
     min_single_word_llr: float = -7.0
-    max_outside_speech: float = 0.3
+    max_outside_speech: float = 0.15
+    max_frames_per_phone: float = math.inf
 
     def __post_init__(self) -> None:
         for name in ("min_mean_llr", "min_word_llr", "min_single_word_llr"):
@@ -116,20 +128,23 @@ class Verification:
         if not 0.0 <= self.max_outside_speech <= 1.0:
             raise ValueError(f"max_outside_speech must be a fraction in [0, 1], "
                              f"got {self.max_outside_speech!r}")
+        if not (isinstance(self.max_frames_per_phone, (int, float))
+                and self.max_frames_per_phone > 0):
+            raise ValueError(f"max_frames_per_phone must be a number of frames > 0 (inf "
+                             f"turns the check off), got {self.max_frames_per_phone!r}")
 
     @classmethod
     def none(cls) -> Verification:
         """No check at all: every answer of the grammar stands."""
-        return cls(-math.inf, -math.inf, -math.inf, 1.0)
+        return cls(-math.inf, -math.inf, -math.inf, 1.0, math.inf)
 
-    def refusal(self, phrase: str, word_llrs: tuple[tuple[str, float], ...],
-                outside_speech: float) -> str:
-        """Why the grammar's answer ``phrase`` (its words' ratios ``word_llrs``) is
-        refused, or "" when it stands."""
+    def refusal(self, heard: Recognition) -> str:
+        """Why the grammar's answer in ``heard`` is refused, or "" when it stands."""
+        phrase, word_llrs = heard.phrase, heard.word_llrs
         if not word_llrs:
             return "no command fits the sound from start to end"
         word, weakest = min(word_llrs, key=lambda pair: pair[1])
-        mean = float(np.mean([llr for _, llr in word_llrs]))
+        mean = heard.mean_llr
         if len(word_llrs) == 1 and weakest < self.min_single_word_llr:
             return (f'"{phrase}" fits the sound badly (log-likelihood ratio {weakest:.2f} '
                     f'per frame; a one-word command needs {self.min_single_word_llr:.2f})')
@@ -139,9 +154,13 @@ class Verification:
         if len(word_llrs) > 1 and weakest < self.min_word_llr:
             return (f'"{word}" fits the sound badly (log-likelihood ratio {weakest:.2f} '
                     f'per frame, needed {self.min_word_llr:.2f})')
-        if outside_speech > self.max_outside_speech:
-            return (f"{100 * outside_speech:.0f} % of the speech lies outside the command "
-                    f"(at most {100 * self.max_outside_speech:.0f} %): more was said")
+        if heard.outside_speech > self.max_outside_speech:
+            return (f"{100 * heard.outside_speech:.0f} % of the speech lies outside the "
+                    f"command (at most {100 * self.max_outside_speech:.0f} %): more was said")
+        if heard.frames_per_phone > self.max_frames_per_phone:
+            return (f'"{phrase}" is drawn out to {heard.frames_per_phone:.0f} frames per '
+                    f"phone in one word (at most {self.max_frames_per_phone:.0f}): more "
+                    "was said than the command")
         return ""
 
 
@@ -191,21 +210,27 @@ class CommandRecognizer:
         pcm = to_int16(x).tobytes()
         phrase, words = self._decode_words(pcm)
         llrs: tuple[tuple[str, float], ...] = ()
-        outside = 1.0
+        outside, per_phone = 1.0, 0.0
         if phrase in self.commands and words:
             llrs = tuple((w, score / (last - first + 1)) for w, score, first, last in words)
             outside = speech_outside_fraction(x, words[0][2], words[-1][3])
-        reason = self.verification.refusal(phrase, llrs, outside)
-        command = None if reason else self.commands[phrase]
-        return Recognition(command, phrase, llrs, outside, reason,
-                           time.perf_counter() - started)
+            per_phone = max((last - first + 1) / self._phones(w)
+                            for w, _, first, last in words)
+        heard = Recognition(None, phrase, llrs, outside, per_phone,
+                            tuple(last - first + 1 for _, _, first, last in words) if llrs
+                            else (), "", time.perf_counter() - started)
+        return self.judged(heard, self.verification)
 
     def judged(self, heard: Recognition, verification: Verification) -> Recognition:
-        """``heard`` judged again with other thresholds (no decoding): for choosing
-        thresholds from recorded trials."""
-        reason = verification.refusal(heard.phrase, heard.word_llrs, heard.outside_speech)
+        """``heard`` judged with ``verification`` (no decoding): for choosing thresholds
+        from recorded trials."""
+        reason = verification.refusal(heard)
         return replace(heard, command=None if reason else self.commands[heard.phrase],
                        reason=reason)
+
+    def _phones(self, word: str) -> int:
+        """The number of phones in ``word``'s first pronunciation."""
+        return len(self._grammar.lookup_word(word).split())
 
     def _decode_words(self, pcm: bytes) -> tuple[str, list[tuple[str, float, int, int]]]:
         """The grammar's phrase and its words: (word, log acoustic score relative to each

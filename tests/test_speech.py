@@ -264,8 +264,6 @@ def test_thresholds_are_checked(recogniser):
     assert recogniser.judged(anything, Verification.none()).accepted
     with pytest.raises(ValueError, match="max_outside_speech"):
         Verification(max_outside_speech=2.0)
-    with pytest.raises(ValueError, match="max_frames_per_phone"):
-        Verification(max_frames_per_phone=0.0)
     with pytest.raises(ValueError, match="must be a Verification"):
         CommandRecognizer(recogniser.commands, -4.0)
     with pytest.raises(ValueError, match="not in the pronunciation dictionary"):
@@ -404,7 +402,7 @@ def test_tuning_picks_the_most_commands_within_the_false_activation_budget():
     judge = CommandRecognizer(commands, Verification.none())
 
     def trial(text, phrase, mean, is_command):
-        heard = Recognition(commands[phrase], phrase, (("w", mean), ("v", mean)), 0.0, 8.0, (9, 9),
+        heard = Recognition(commands[phrase], phrase, (("w", mean), ("v", mean)), 0.0, (9, 9),
                             "", 0.1)
         return Trial(text, is_command, Voice("en-us"), None, heard, 1.0)
 

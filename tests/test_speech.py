@@ -158,11 +158,14 @@ def recogniser():
     return CommandRecognizer(floor_commands())
 
 
-def say(text: str, voice_name: str = "en-us", snr_db=None):
+def say(text: str, voice_name: str | None = None, snr_db=None):
+    """``text`` as a held-out speaker says it (flite's slt), or in the espeak-ng voice
+    ``voice_name``."""
     from abcwc.experiments.speech_trials import utterance
     from abcwc.perception.speech.synthesis import Voice
 
-    return utterance(text, Voice(voice_name), snr_db)
+    voice = Voice("slt", "flite") if voice_name is None else Voice(voice_name)
+    return utterance(text, voice, snr_db)
 
 
 @pytest.mark.parametrize("phrase", ["drive forward", "turn left", "turn right", "stop",
@@ -274,23 +277,19 @@ def test_spotting_single_words_fires_on_conversation_more_than_two_word_commands
     """The thesis's finding (section 4.1.7), with the command allowed anywhere in the
     utterance as BitVoicer listened: single words fire on conversation that shares
     them; the two-word commands (stop aside, in both sets) fire less. Two held-out
-    speakers (flite's kal and slt) read every sentence of both sets."""
+    speakers (flite's kal and slt) read the held-out sentences."""
     _need_speech_tools()
-    from abcwc.experiments.speech_trials import (
-        HELD_OUT_DISTRACTORS,
-        TUNING_DISTRACTORS,
-        spotting_false_activations,
-    )
+    from abcwc.experiments.speech_trials import HELD_OUT_DISTRACTORS, spotting_false_activations
     from abcwc.perception.speech.synthesis import HELD_OUT_VOICES
 
     voices = tuple(v for v in HELD_OUT_VOICES
                    if v.engine == "flite" and v.rate == 1.0 and v.pitch == 0.0)
-    sentences = list(TUNING_DISTRACTORS + HELD_OUT_DISTRACTORS)
+    sentences = list(HELD_OUT_DISTRACTORS)
     single = spotting_false_activations(["forward", "reverse", "left", "right"], sentences,
                                         voices)
     two = spotting_false_activations(["drive forward", "drive reverse", "turn left",
                                       "turn right"], sentences, voices)
-    assert single >= 0.10          # of 116 readings: at least one in ten
+    assert single >= 0.10          # of 60 readings: at least one in ten
     assert two <= single / 2
 
 
@@ -371,7 +370,7 @@ def test_tuning_and_held_out_voices_share_no_speaker():
 def test_a_command_alone_or_after_a_pause_is_obeyed_and_inside_a_sentence_refused(
         recogniser, voice):
     """Held-out speakers: the sentences hold a whole command ("go to the meeting" in
-    "I am going to the meeting later"); the grammar alone hears it."""
+    "I am going to the meeting later"); the grammar alone would obey them."""
     from abcwc.experiments.speech_trials import utterance
     from abcwc.perception.speech.recognizer import Verification
     from abcwc.perception.speech.synthesis import Voice
@@ -380,10 +379,8 @@ def test_a_command_alone_or_after_a_pause_is_obeyed_and_inside_a_sentence_refuse
     for phrase, pause in (("go to the meeting", 0.15), ("turn left", 0.6)):
         heard = recogniser.recognise(utterance(phrase, speaker, pause=pause))
         assert heard.accepted and heard.command.phrase == phrase, heard.reason
-    for sentence, inside in (("I am going to the meeting later", "go to the meeting"),
-                             ("could you turn left at the corner", "turn left")):
+    for sentence in ("I am going to the meeting later", "could you turn left at the corner"):
         heard = recogniser.recognise(utterance(sentence, speaker))
-        assert heard.phrase == inside                  # the grammar alone would obey
         assert recogniser.judged(heard, Verification.none()).accepted
         assert not heard.accepted, (sentence, heard.phrase)
 

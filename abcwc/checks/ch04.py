@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from functools import lru_cache
+from functools import cache, lru_cache
 
 import numpy as np
 from scipy.special import logsumexp
@@ -44,6 +44,7 @@ __all__ = [
     "BARS",
     "HELD_OUT_SEED",
     "PREDICTION_TOLERANCE",
+    "held_out_condition",
     "held_out_trials",
     "prediction_check",
     "reference_word_ratio",
@@ -165,22 +166,34 @@ def prediction_check(predicted: Callable[[], tuple[float, float]], single: float
 # --- exercise 3: a threshold for voices never heard ------------------------------------------
 
 
-@lru_cache(maxsize=1)
 def held_out_trials():  # noqa: ANN201 - speech_trials.Trial lists, imported lazily
     """The house commands and the held-out sentences said by the held-out speakers (kal
     and slt, each in flite and festival, at their own rate and pitch), in a quiet room
     and in room noise at 20 dB SNR, decoded once with no verification
     (``Verification.none()``): ({None: quiet trials, 20.0: noisy trials}, the
     recogniser that decoded them)."""
-    from abcwc.experiments.speech_trials import HELD_OUT_DISTRACTORS, floor_commands, run_trials
+    return {snr: held_out_condition(snr) for snr in BARS}, _bare_recogniser()
+
+
+@lru_cache(maxsize=1)
+def _bare_recogniser():  # noqa: ANN202 - a CommandRecognizer, imported lazily
+    from abcwc.experiments.speech_trials import floor_commands
     from abcwc.perception.speech.recognizer import CommandRecognizer, Verification
 
-    commands = floor_commands()
-    recogniser = CommandRecognizer(commands, Verification.none())
-    trials = {snr: run_trials(recogniser, commands.phrases, list(HELD_OUT_DISTRACTORS),
-                              exercise_voices(), snr, seed=HELD_OUT_SEED)
-              for snr in BARS}
-    return trials, recogniser
+    return CommandRecognizer(floor_commands(), Verification.none())
+
+
+@cache
+def held_out_condition(snr: float | None) -> list:
+    """``held_out_trials`` in one condition (``snr`` None: quiet; one of ``BARS``),
+    decoded once and kept: a notebook can decode one condition per cell."""
+    from abcwc.experiments.speech_trials import HELD_OUT_DISTRACTORS, run_trials
+
+    if snr not in BARS:
+        raise ValueError(f"snr must be one of {list(BARS)}, got {snr!r}")
+    recogniser = _bare_recogniser()
+    return run_trials(recogniser, recogniser.commands.phrases, list(HELD_OUT_DISTRACTORS),
+                      exercise_voices(), snr, seed=HELD_OUT_SEED)
 
 
 def exercise_voices() -> tuple:

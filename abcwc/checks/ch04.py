@@ -48,6 +48,7 @@ __all__ = [
     "held_out_trials",
     "prediction_check",
     "reference_word_ratio",
+    "synthesise_held_out",
     "threshold_check",
     "word_ratio_check",
 ]
@@ -194,6 +195,20 @@ def held_out_condition(snr: float | None) -> list:
     recogniser = _bare_recogniser()
     return run_trials(recogniser, recogniser.commands.phrases, list(HELD_OUT_DISTRACTORS),
                       exercise_voices(), snr, seed=HELD_OUT_SEED)
+
+
+def synthesise_held_out() -> int:
+    """Synthesise every utterance of ``held_out_trials`` once (the synthesiser keeps
+    them), so that decoding them later takes less time in one notebook cell; returns
+    how many."""
+    from abcwc.experiments.speech_trials import HELD_OUT_DISTRACTORS, floor_commands
+    from abcwc.perception.speech.synthesis import speak
+
+    texts = floor_commands().phrases + list(HELD_OUT_DISTRACTORS)
+    for voice in exercise_voices():
+        for text in texts:
+            speak(text, voice)
+    return len(texts) * len(exercise_voices())
 
 
 def exercise_voices() -> tuple:

@@ -13,8 +13,9 @@ So each answer is checked twice before the chair obeys it.
 
    is highest when the word was said and much lower when the grammar bent other sounds
    into it (a person's "go forward ten meters", from pocketsphinx's own test recordings,
-   scores -3.1 per frame; the espeak-ng voices' commands -5 to -7, as the model knows
-   them less well): the "on-line garbage" model of utterance verification
+   scores -3.1 per frame; flite's and festival's voices, made from people's
+   recordings, -3 to -6; espeak-ng's formant voices -4 to -7, as the model knows them
+   less well): the "on-line garbage" model of utterance verification
    (Bourlard, D'hoore and Boite, "Optimizing recognition and rejection performance in
    wordspotting systems", ICASSP 1994; Jiang, "Confidence measures for speech
    recognition: a survey", Speech Communication 45, 2005). ``word_log_likelihood_ratio``

@@ -11,6 +11,10 @@ from abcwc.checks import ch04
 from abcwc.perception.speech.recognizer import word_log_likelihood_ratio
 from tests.check_helpers import assert_not_yet, assert_pass, not_written
 
+SOLUTION_THRESHOLD = -6.5   # the notebook's answer to exercise 3
+LENIENT = -8.0              # below the tuning speakers' sentences
+STRICT = -5.0               # above most of their commands
+
 
 def student_word_ratio(scores, aligned):
     """Written from the text, frame by frame: the word's state against the frame's best."""
@@ -67,19 +71,22 @@ def test_word_ratio_check_refuses_plausible_slips(wrong, fragment, capsys):
 
 def test_prediction_check(capsys):
     assert_pass(ch04.prediction_check(lambda: (25, 5), 20.0, 7.5), capsys)
-    assert_pass(ch04.prediction_check(lambda: [60.0, 10.0], 20.0, 7.5), capsys)
+    assert_pass(ch04.prediction_check(lambda: [29.0, 0.0], 20.0, 7.5), capsys)
 
 
 @pytest.mark.parametrize(("predicted", "fragment"), [
     (lambda: (5.0, 25.0), "far more often"),          # the thesis's finding reversed
     (lambda: (10.0, 10.0), "far more often"),
+    (lambda: (90.0, 5.0), "71 points off"),           # the order right, the size not
+    (lambda: (59.0, 10.0), "40 points off"),
+    (lambda: (25.0, 20.0), "12 points off"),
     (lambda: (150.0, 5.0), "percentage"),
     (lambda: 20.0, "two percentages"),
     (not_written, "NotImplementedError"),
     (ch04.reference_word_ratio, "abcwc's own"),
 ])
 def test_prediction_check_refuses(predicted, fragment, capsys):
-    assert_not_yet(ch04.prediction_check(predicted, 20.0, 7.5), capsys, fragment)
+    assert_not_yet(ch04.prediction_check(predicted, 19.0, 7.5), capsys, fragment)
 
 
 @pytest.fixture(scope="module")
@@ -90,13 +97,45 @@ def held_out():
     return ch04.held_out_trials()
 
 
+def test_the_exercise_is_judged_on_held_out_speakers_in_quiet_and_noise(held_out):
+    from abcwc.perception.speech.synthesis import HELD_OUT_SPEAKERS, TUNING_SPEAKERS
+
+    trials, _ = held_out
+    assert set(trials) == {None, 20.0}
+    for condition in trials.values():
+        speakers = {t.voice.speaker for t in condition}
+        assert speakers == set(HELD_OUT_SPEAKERS) and not speakers & set(TUNING_SPEAKERS)
+        assert {t.voice.engine for t in condition} == {"flite", "festival"}
+        assert sum(not t.is_command for t in condition) >= 100
+
+
 def test_threshold_check_passes_a_threshold_with_a_margin(held_out, capsys):
-    assert_pass(ch04.threshold_check(lambda: -7.0), capsys)
+    assert_pass(ch04.threshold_check(lambda: SOLUTION_THRESHOLD), capsys)
+
+
+def test_threshold_check_is_decided_by_more_than_one_sentence(held_out):
+    """Between the solution's threshold and a lenient one that fails, several readings
+    of several sentences change sides: the verdict does not hang on one sentence."""
+    from dataclasses import replace
+
+    from abcwc.experiments.speech_trials import judged_again
+    from abcwc.perception.speech.recognizer import Verification
+
+    trials, recogniser = held_out
+
+    def fired(threshold):
+        verification = replace(Verification(), min_mean_llr=threshold)
+        return {(snr, t.voice, t.text) for snr, condition in trials.items()
+                for t in judged_again(condition, recogniser, verification)
+                if not t.is_command and t.heard.accepted}
+
+    more = fired(LENIENT) - fired(SOLUTION_THRESHOLD)
+    assert len(more) >= 3 and len({text for _, _, text in more}) >= 2
 
 
 @pytest.mark.parametrize(("chosen", "fragment"), [
-    (lambda: -8.0, "passed as commands"),      # below the tuning sentences' scores
-    (lambda: -6.0, "refuses most commands"),   # so strict few commands get through
+    (lambda: LENIENT, "passed as commands"),
+    (lambda: STRICT, "refuses commands"),
     (lambda: 0.5, "above 0"),
     (lambda: float("nan"), "one number"),
     (not_written, "NotImplementedError"),

@@ -112,7 +112,7 @@ def test_a_spoken_command_is_heard_and_takes_the_chair_there():
     chair = SimBase("lab", seed=5, lidar=True, people=False)
     mission = Mission.for_world(chair.world)
     heard = CommandRecognizer(mission.commands).recognise(
-        utterance("go to the centre", Voice("en-us")))
+        utterance("go to the centre", Voice("slt", "flite")))
     assert heard.accepted, heard.reason
     mission.command(heard.command)
     _run(chair, mission, 40)

@@ -82,15 +82,17 @@ def test_pocketsphinx_reads_the_transform():
 
 
 def test_enrolling_a_voice_makes_its_commands_fit_better():
-    """24 read sentences of a voice the thresholds never saw (en-us+f4): its commands'
-    words then score higher against the best state in each frame."""
+    """24 read sentences of a voice the thresholds never saw (espeak-ng's en-us+f4, a
+    stress voice): its commands' words then score higher against the best state in each
+    frame."""
     _need_speech_tools()
     from abcwc.experiments.speech_trials import enrollment_readings, floor_commands, utterance
     from abcwc.perception.speech.adaptation import enroll
     from abcwc.perception.speech.recognizer import CommandRecognizer, Verification
-    from abcwc.perception.speech.synthesis import Voice
+    from abcwc.perception.speech.synthesis import ESPEAK_STRESS_VOICES
 
-    voice = Voice("en-us+f4", 155, 65)
+    voice = ESPEAK_STRESS_VOICES[1]
+    assert voice.name == "en-us+f4"
     speaker = enroll(enrollment_readings(voice))
     assert speaker.frames > 2000
     commands = floor_commands()

@@ -9,11 +9,12 @@ Exercises:
 * ``predicted_false_activations()``: two percentages written down *before* the run
   that measures them: how many of the conversation sentences fire a command when the
   command may be anywhere in what was said, with the thesis's single words and with its
-  two-word commands;
+  two-word commands, each within ``PREDICTION_TOLERANCE`` points of the measurement;
 * ``chosen_mean_threshold()``: the words' mean ratio a command must reach, read off the
-  tuning voices' plot, judged on voices and sentences the notebook never used: at most
-  2 % of the sentences may pass as commands, and at least a quarter of the commands
-  must be recognised.
+  tuning speakers' plot, judged on speakers and sentences the notebook never used (kal
+  and slt, each in flite and festival): in a quiet room at least 90 % of the commands
+  recognised and at most 2 % of the sentence readings taken for commands, in room
+  noise at 20 dB SNR at least 85 % and at most 3 % (``BARS``).
 
 Each ``reference_*`` function is an answer the notebook falls back on; a check handed
 the library's own function (or a ``reference_*``) says so instead of passing.
@@ -23,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from functools import lru_cache
+from functools import cache, lru_cache
 
 import numpy as np
 from scipy.special import logsumexp
@@ -40,20 +41,21 @@ from abcwc.checks.report import (
 from abcwc.perception.speech.recognizer import word_log_likelihood_ratio
 
 __all__ = [
+    "BARS",
     "HELD_OUT_SEED",
-    "MAX_FALSE_ACTIVATIONS",
-    "MIN_RECOGNISED",
+    "PREDICTION_TOLERANCE",
+    "held_out_condition",
     "held_out_trials",
     "prediction_check",
     "reference_word_ratio",
+    "synthesise_held_out",
     "threshold_check",
     "word_ratio_check",
 ]
 
-MAX_FALSE_ACTIVATIONS = 0.02
-"""Of the unseen sentences, the share that may pass as commands."""
-MIN_RECOGNISED = 0.25
-"""Of the unseen commands, the share that must be recognised."""
+BARS = {None: (0.90, 0.02), 20.0: (0.85, 0.03)}
+"""SNR (dB; None: a quiet room) -> (the least share of the held-out speakers' commands
+recognised, the most share of their sentence readings taken for commands)."""
 HELD_OUT_SEED = 400
 
 
@@ -129,11 +131,16 @@ def word_ratio_check(fn: Callable) -> str:
 # --- exercise 2: predict the false activations ----------------------------------------------
 
 
+PREDICTION_TOLERANCE = 10.0
+"""How far (percentage points) each predicted figure may lie from the measured one."""
+
+
 @checker("prediction")
 def prediction_check(predicted: Callable[[], tuple[float, float]], single: float,
                      two_word: float) -> str:
     """The two percentages written before the run against what it measured
-    (``single`` and ``two_word``, %)."""
+    (``single`` and ``two_word``, %): each within ``PREDICTION_TOLERANCE`` points, and
+    single words above two-word commands."""
     value = predicted()
     guess_single, guess_two = numbers(value, 2, "predicted_false_activations()",
                                       "return two percentages: (single words, two-word commands)")
@@ -145,37 +152,83 @@ def prediction_check(predicted: Callable[[], tuple[float, float]], single: float
                      f"{guess_two:.0f} % for two-word commands; {measured}. Conversation "
                      "holds the single words far more often than the pairs: that is what "
                      "the thesis found (4.1.7)")
-    off = abs(guess_single - single)
-    closeness = ("close" if off <= 5 else "the order right, the size off by "
-                 f"{off:.0f} points: conversation shares the words the chapter's "
-                 "sentences were written with")
+    for name, guess, truth in (("single words", guess_single, single),
+                               ("two-word commands", guess_two, two_word)):
+        if abs(guess - truth) > PREDICTION_TOLERANCE:
+            raise NotYet(f"you predicted {guess:.0f} % for {name}; {measured}: "
+                         f"{abs(guess - truth):.0f} points off, more than the "
+                         f"{PREDICTION_TOLERANCE:.0f} a prediction may miss by. Count "
+                         "the sentences that hold one of the words whole, and ask which "
+                         "of them a keyword spotter would fire on")
     return (f"you predicted {guess_single:.0f} % and {guess_two:.0f} %; {measured}: "
-            f"{closeness}")
+            f"both within {PREDICTION_TOLERANCE:.0f} points")
 
 
 # --- exercise 3: a threshold for voices never heard ------------------------------------------
 
 
-@lru_cache(maxsize=1)
-def held_out_trials():  # noqa: ANN201 - a list of speech_trials.Trial, imported lazily
-    """The house commands and the held-out sentences, said by the five held-out voices,
-    decoded once with no verification (``Verification.none()``), and the
-    recogniser that decoded them."""
-    from abcwc.experiments.speech_trials import TEST_DISTRACTORS, floor_commands, run_trials
-    from abcwc.perception.speech.recognizer import CommandRecognizer, Verification
-    from abcwc.perception.speech.synthesis import TEST_VOICES
+def held_out_trials():  # noqa: ANN201 - speech_trials.Trial lists, imported lazily
+    """The house commands and the held-out sentences said by the held-out speakers (kal
+    and slt, each in flite and festival, at their own rate and pitch), in a quiet room
+    and in room noise at 20 dB SNR, decoded once with no verification
+    (``Verification.none()``): ({None: quiet trials, 20.0: noisy trials}, the
+    recogniser that decoded them)."""
+    return {snr: held_out_condition(snr) for snr in BARS}, _bare_recogniser()
 
-    commands = floor_commands()
-    recogniser = CommandRecognizer(commands, Verification.none())
-    trials = run_trials(recogniser, commands.phrases, list(TEST_DISTRACTORS),
-                        TEST_VOICES, seed=HELD_OUT_SEED)
-    return trials, recogniser
+
+@lru_cache(maxsize=1)
+def _bare_recogniser():  # noqa: ANN202 - a CommandRecognizer, imported lazily
+    from abcwc.experiments.speech_trials import floor_commands
+    from abcwc.perception.speech.recognizer import CommandRecognizer, Verification
+
+    return CommandRecognizer(floor_commands(), Verification.none())
+
+
+@cache
+def held_out_condition(snr: float | None) -> list:
+    """``held_out_trials`` in one condition (``snr`` None: quiet; one of ``BARS``),
+    decoded once and kept: a notebook can decode one condition per cell."""
+    from abcwc.experiments.speech_trials import HELD_OUT_DISTRACTORS, run_trials
+
+    if snr not in BARS:
+        raise ValueError(f"snr must be one of {list(BARS)}, got {snr!r}")
+    recogniser = _bare_recogniser()
+    return run_trials(recogniser, recogniser.commands.phrases, list(HELD_OUT_DISTRACTORS),
+                      exercise_voices(), snr, seed=HELD_OUT_SEED)
+
+
+def synthesise_held_out() -> int:
+    """Synthesise every utterance of ``held_out_trials`` once (the synthesiser keeps
+    them), so that decoding them later takes less time in one notebook cell; returns
+    how many."""
+    from abcwc.experiments.speech_trials import HELD_OUT_DISTRACTORS, floor_commands
+    from abcwc.perception.speech.synthesis import speak
+
+    texts = floor_commands().phrases + list(HELD_OUT_DISTRACTORS)
+    for voice in exercise_voices():
+        for text in texts:
+            speak(text, voice)
+    return len(texts) * len(exercise_voices())
+
+
+def exercise_voices() -> tuple:
+    """The held-out voices at their own rate and pitch."""
+    from abcwc.perception.speech.synthesis import HELD_OUT_VOICES
+
+    return tuple(v for v in HELD_OUT_VOICES if v.rate == 1.0 and v.pitch == 0.0)
+
+
+def _condition(snr: float | None) -> str:
+    return "in a quiet room" if snr is None else f"in room noise at {snr:.0f} dB SNR"
 
 
 @checker("threshold")
 def threshold_check(chosen: Callable[[], float]) -> str:
-    """``chosen()``, the words' mean ratio a command needs, on voices and sentences the
-    notebook never used."""
+    """``chosen()``, the words' mean ratio a command needs (the library's other
+    thresholds kept), on speakers and sentences the notebook never used, against
+    ``BARS`` in each condition."""
+    from dataclasses import replace
+
     from abcwc.experiments.speech_trials import judged_again, rates
     from abcwc.perception.speech.recognizer import Verification
 
@@ -184,21 +237,30 @@ def threshold_check(chosen: Callable[[], float]) -> str:
            f"chosen_mean_threshold() gave {format_value(value)}; return one number")
     expect(value <= 0, f"{value:g} is above 0: a word's ratio per frame against the best "
            "state in each frame is at most 0, so nothing would pass")
-    trials, recogniser = held_out_trials()
-    judged = judged_again(trials, recogniser, Verification(min_mean_llr=float(value)))
-    found = rates(judged)
-    fired = sorted({t.text for t in judged if not t.is_command and t.heard.accepted})
-    if found.false_activations > MAX_FALSE_ACTIVATIONS:
-        raise NotYet(f"at {value:.2f}, {100 * found.false_activations:.1f} % of sentences the "
-                     f"notebook never used passed as commands ({'; '.join(fired[:3])}); at "
-                     f"most {100 * MAX_FALSE_ACTIVATIONS:.0f} % may: the edge of the tuning "
-                     "data is not a safe place for new voices, leave a margin")
-    if found.recognised < MIN_RECOGNISED:
-        raise NotYet(f"at {value:.2f} only {100 * found.recognised:.0f} % of the commands "
-                     f"in new voices are recognised (at least {100 * MIN_RECOGNISED:.0f} % "
-                     "needed): the threshold refuses most commands as well as the "
-                     "sentences; the sentences that score highest are often refused by "
-                     "the weakest-word and outside-speech checks already")
-    return (f"{value:.2f} on five voices and {found.distractors // 5} sentences never "
-            f"used: {100 * found.recognised:.0f} % of the commands recognised, "
-            f"{100 * found.false_activations:.1f} % of the sentences taken for commands")
+    held, recogniser = held_out_trials()
+    verification = replace(Verification(), min_mean_llr=float(value))
+    said = []
+    for snr, trials in held.items():
+        least_recognised, most_false = BARS[snr]
+        judged = judged_again(trials, recogniser, verification)
+        found = rates(judged)
+        fired = [t.text for t in judged if not t.is_command and t.heard.accepted]
+        where = _condition(snr)
+        if found.false_activations > most_false:
+            raise NotYet(f"at {value:.2f}, {len(fired)} of {found.distractors} readings "
+                         f"({100 * found.false_activations:.1f} %) of sentences the "
+                         f"notebook never used passed as commands {where} "
+                         f"({'; '.join(sorted(set(fired))[:3])}); at most "
+                         f"{100 * most_false:.0f} % may: the edge of the tuning data is "
+                         "not a safe place for new voices, leave a margin")
+        if found.recognised < least_recognised:
+            raise NotYet(f"at {value:.2f} only {100 * found.recognised:.0f} % of the "
+                         f"commands of new speakers are recognised {where} (at least "
+                         f"{100 * least_recognised:.0f} % needed): the threshold refuses "
+                         "commands as well as the sentences; the sentences that score "
+                         "highest are often refused by the other checks already")
+        said.append(f"{where} {100 * found.recognised:.0f} % of {found.commands} commands "
+                    f"recognised, {len(fired)} of {found.distractors} sentence readings "
+                    "taken for commands")
+    return f"{value:.2f} on {len(exercise_voices())} voices of two new speakers: " + \
+        "; ".join(said)

@@ -1,4 +1,4 @@
-"""Spoken commands: the command grammar, audio buffers, espeak-ng test speech, the
+"""Spoken commands: the command grammar, audio buffers, synthetic test speech, the
 verified pocketsphinx recogniser and its adaptation to one speaker."""
 
 from abcwc.perception.speech.adaptation import MeanTransform, enroll

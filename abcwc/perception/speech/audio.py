@@ -91,18 +91,34 @@ def with_noise_floor(x: np.ndarray, rms: float = NOISE_FLOOR, seed: int = 0) -> 
     return x + rng.normal(0.0, rms, x.size)
 
 
+def room_noise(n: int, seed: int = 0) -> np.ndarray:
+    """``n`` samples of seeded noise whose power falls 3 dB per octave (pink, 1/f, from
+    20 Hz up), unit RMS: closer to a room's ventilation and motors than white noise."""
+    rng = np.random.default_rng(seed)
+    spectrum = np.fft.rfft(rng.normal(0.0, 1.0, n))
+    hz = np.fft.rfftfreq(n, 1.0 / SAMPLE_RATE)
+    noise = np.fft.irfft(spectrum / np.sqrt(np.maximum(hz, 20.0)), n)
+    return noise / math.sqrt(float(np.mean(noise ** 2)))
+
+
 def mix_at_snr(speech: np.ndarray, snr_db: float, seed: int = 0,
-               speech_mask: np.ndarray | None = None) -> np.ndarray:
-    """``speech`` with seeded white noise at ``snr_db`` dB signal-to-noise ratio, the
-    signal power measured where ``speech_mask`` is true (default: samples above 1 % of
-    the peak, so that padding silence does not dilute it)."""
+               speech_mask: np.ndarray | None = None, noise: str = "white") -> np.ndarray:
+    """``speech`` with seeded ``noise`` ("white", or "room": ``room_noise``) at ``snr_db``
+    dB signal-to-noise ratio, the signal power measured where ``speech_mask`` is true
+    (default: samples above 1 % of the peak, so that padding silence does not dilute
+    it)."""
     if not math.isfinite(snr_db):
         raise ValueError(f"snr_db must be finite, got {snr_db}")
+    if noise not in ("white", "room"):
+        raise ValueError(f'noise must be "white" or "room", got {noise!r}')
     if speech_mask is None:
         speech_mask = np.abs(speech) > 0.01 * float(np.max(np.abs(speech)))
     power = float(np.mean(speech[speech_mask] ** 2))
-    rng = np.random.default_rng(seed)
-    return speech + rng.normal(0.0, math.sqrt(power / 10 ** (snr_db / 10)), speech.size)
+    if noise == "room":
+        unit = room_noise(speech.size, seed)
+    else:
+        unit = np.random.default_rng(seed).normal(0.0, 1.0, speech.size)
+    return speech + math.sqrt(power / 10 ** (snr_db / 10)) * unit
 
 
 def to_int16(x: np.ndarray) -> np.ndarray:

@@ -1,9 +1,38 @@
-"""Test speech made by espeak-ng (Debian's ``espeak-ng``), so that no recording of a
-person is needed: the same sentence in several voices, at several speeds and pitches.
+"""Test speech from Debian's offline synthesisers, so that no recording of a person is
+needed: the same sentence by several speakers, at several rates and pitches.
 
-espeak-ng is a formant synthesiser: its voices are intelligible but unlike any one
-speaker, which makes them a fair, repeatable test of a recogniser and a hard one (a
-person is usually recognised better). Its output is deterministic for a given version.
+Three engines (each a Debian main package):
+
+* **espeak-ng** (``espeak-ng``), a formant synthesiser: it builds each sound from a few
+  resonances, so its voices are intelligible but unlike any one speaker, and the
+  acoustic model knows them badly (their commands' words score -5 to -7 per frame
+  where a person's score about -3: ``recognizer`` module notes). A hard, repeatable
+  stress test.
+* **flite** (``flite``): voices made from recordings of people, kal (diphones) and
+  awb, rms and slt (statistical parametric voices from CMU ARCTIC recordings).
+* **festival** (``festival`` with ``festvox-kallpc16k``, ``festvox-kdlpc16k`` and
+  ``festvox-us-slt-hts``): kal and ked (diphones) and slt (HTS).
+
+A ``Voice`` names its engine, the engine's voice and the *speaker* whose recordings it
+was made from: kal and slt each speak through both flite and festival, so a split of
+voices into tuning and held-out sets is made by speaker (``TUNING_SPEAKERS``,
+``HELD_OUT_SPEAKERS``), never by engine. Each engine's output is deterministic for a
+given version.
+
+Rate and pitch are asked of the engine itself: ``rate`` scales the speaking rate
+(1.2 is 20 % faster than the voice's own) and ``pitch`` moves the mean fundamental
+frequency by semitones. How each engine takes them:
+
+* espeak-ng: ``-s 160 * rate`` words per minute; ``-p 50 + 6 * pitch`` (its 0-99
+  scale: 20 steps moved en-us's mean F0 by 3.3 semitones, 105 to 127 Hz, measured by
+  autocorrelation here);
+* flite: ``duration_stretch = 1 / rate``; ``int_f0_target_mean`` set to the voice's
+  own mean F0 (``FLITE_OWN_F0_HZ``, measured the same way) moved by ``pitch``
+  semitones (rms keeps its own pitch whatever it is asked);
+* festival diphones: ``Duration_Stretch = 1 / rate``; ``target_f0_mean`` of
+  ``int_lr_params`` from the voices' own 105 Hz; festival HTS (slt): hts_engine's
+  ``-r rate``, and no pitch shift (festival's hts_engine ignores ``-fm``: its output
+  was the same to the byte), so its voices differ in rate only.
 """
 
 from __future__ import annotations
@@ -11,56 +40,168 @@ from __future__ import annotations
 import io
 import shutil
 import subprocess
+import tempfile
 import wave
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from abcwc.perception.speech.audio import SAMPLE_RATE, to_float_audio
 
-ESPEAK = "espeak-ng"
+ENGINES = {"espeak-ng": "espeak-ng", "flite": "flite", "festival": "text2wave"}
+"""Engine name -> the program that runs it."""
+DEBIAN_PACKAGES = {"espeak-ng": "espeak-ng", "flite": "flite",
+                   "festival": "festival festvox-kallpc16k festvox-kdlpc16k "
+                               "festvox-us-slt-hts"}
+FLITE_OWN_F0_HZ = {"kal16": 86.0, "awb": 128.0, "rms": 102.0, "slt": 172.0}
+"""Mean F0 of each flite voice as it speaks by default (Hz), by autocorrelation."""
+FESTIVAL_VOICES = {"kal": "kal_diphone", "ked": "ked_diphone",
+                   "slt": "cmu_us_slt_arctic_hts"}
+"""festival voice name -> its ``(voice_...)`` function."""
+FESTIVAL_DIPHONE_F0_HZ = 105.0          # target_f0_mean in kal's and ked's definitions
 
 
 @dataclass(frozen=True)
 class Voice:
-    """An espeak-ng voice: its name (``espeak-ng --voices=en`` lists them; ``+f2`` and the
-    like are variants), speed in words per minute and pitch (0-99, 50 is the default)."""
+    """A voice: the engine's voice ``name`` (``espeak-ng --voices=en``, ``flite -lv``, or
+    one of ``FESTIVAL_VOICES``), its ``engine``, the ``speaker`` it was made from (for
+    espeak-ng, the voice name itself), the speaking ``rate`` (1 is the voice's own) and
+    the ``pitch`` shift (semitones)."""
 
     name: str
-    speed: int = 160
-    pitch: int = 50
+    engine: str = "espeak-ng"
+    speaker: str = ""
+    rate: float = 1.0
+    pitch: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.engine not in ENGINES:
+            raise ValueError(f"engine {self.engine!r} is not one of {', '.join(ENGINES)}")
+        if self.engine == "flite" and self.name not in FLITE_OWN_F0_HZ:
+            raise ValueError(f"flite voice {self.name!r} is not one of "
+                             f"{', '.join(FLITE_OWN_F0_HZ)}")
+        if self.engine == "festival" and self.name not in FESTIVAL_VOICES:
+            raise ValueError(f"festival voice {self.name!r} is not one of "
+                             f"{', '.join(FESTIVAL_VOICES)}")
+        if not 0.5 <= self.rate <= 2.0:
+            raise ValueError(f"rate must be 0.5-2.0 times the voice's own, got {self.rate}")
+        if not -8.0 <= self.pitch <= 8.0:
+            raise ValueError(f"pitch must be -8 to 8 semitones, got {self.pitch}")
+        if self.engine == "festival" and self.name == "slt" and self.pitch != 0.0:
+            raise ValueError("festival's HTS voice slt takes no pitch shift (pitch=0): "
+                             "its engine ignores one")
+        if not self.speaker:
+            object.__setattr__(self, "speaker", self.name)
+
+    @property
+    def label(self) -> str:
+        """``engine:name`` with its rate and pitch when they are not the voice's own."""
+        extra = "" if self.rate == 1.0 else f" x{self.rate:g}"
+        extra += "" if self.pitch == 0.0 else f" {self.pitch:+g} st"
+        return f"{self.engine}:{self.name}{extra}"
 
 
-# The voices the recogniser's thresholds were set on, and the voices it is tested on,
-# which it never saw: other speakers, accents, speeds and pitches.
-TUNING_VOICES = (Voice("en-us"), Voice("en-us+f2", 150, 60), Voice("en-gb-x-rp", 170, 45),
-                 Voice("en-us+m3", 140, 40))
-TEST_VOICES = (Voice("en-us-nyc", 165, 50), Voice("en-us+f4", 155, 65),
-               Voice("en-gb", 150, 50), Voice("en-us+m7", 175, 35),
-               Voice("en-gb-x-rp+f3", 145, 55))
+def _varied(engine: str, name: str, speaker: str) -> tuple[Voice, ...]:
+    """One voice at its own rate and pitch, faster and higher, slower and lower (the
+    rate alone for festival's slt)."""
+    shift = 0.0 if (engine, name) == ("festival", "slt") else 2.0
+    return tuple(Voice(name, engine, speaker, rate, pitch)
+                 for rate, pitch in ((1.0, 0.0), (1.15, shift), (0.88, -shift)))
+
+
+TUNING_SPEAKERS = ("awb", "rms", "ked")
+"""Speakers (flite's awb and rms, festival's ked) whose voices the thresholds were set on,
+beside the espeak-ng ``ESPEAK_TUNING_VOICES``."""
+HELD_OUT_SPEAKERS = ("kal", "slt")
+"""Speakers no threshold was set on, each in both flite and festival."""
+
+TUNING_VOICES = (_varied("flite", "awb", "awb") + _varied("flite", "rms", "rms")
+                 + _varied("festival", "ked", "ked"))
+HELD_OUT_VOICES = (_varied("flite", "kal16", "kal") + _varied("festival", "kal", "kal")
+                   + _varied("flite", "slt", "slt") + _varied("festival", "slt", "slt"))
+ESPEAK_TUNING_VOICES = (Voice("en-us"), Voice("en-us+f2", rate=0.94, pitch=1.7),
+                        Voice("en-gb-x-rp", rate=1.06, pitch=-0.8),
+                        Voice("en-us+m3", rate=0.88, pitch=-1.7))
+ESPEAK_STRESS_VOICES = (Voice("en-us-nyc", rate=1.03), Voice("en-us+f4", rate=0.97, pitch=2.5),
+                        Voice("en-gb", rate=0.94), Voice("en-us+m7", rate=1.09, pitch=-2.5),
+                        Voice("en-gb-x-rp+f3", rate=0.91, pitch=0.8))
+"""espeak-ng voices no threshold was set on: the formant voices' figures, printed beside
+the held-out speakers'."""
+
+
+def engine_available(engine: str) -> bool:
+    """True when ``engine``'s program is on the PATH."""
+    return shutil.which(ENGINES[engine]) is not None
+
+
+def missing_engines() -> list[str]:
+    """The engines whose programs are not installed."""
+    return [engine for engine in ENGINES if not engine_available(engine)]
 
 
 def espeak_available() -> bool:
     """True when the espeak-ng program is on the PATH."""
-    return shutil.which(ESPEAK) is not None
+    return engine_available("espeak-ng")
 
 
 def speak(text: str, voice: Voice = Voice("en-us")) -> np.ndarray:
-    """``text`` spoken by espeak-ng in ``voice``: float audio in [-1, 1] at 16 kHz.
+    """``text`` spoken in ``voice``: float audio in [-1, 1] at 16 kHz. Deterministic,
+    so the last 1024 are kept, as float32 (synthesis takes 10-600 ms each).
 
-    Raises ``RuntimeError`` when espeak-ng is not installed (Debian: ``apt install
-    espeak-ng``) and ``ValueError`` for an empty text."""
+    Raises ``RuntimeError`` when the voice's engine is not installed (the message
+    names the Debian packages) and ``ValueError`` for an empty text."""
     if not text.strip():
         raise ValueError("nothing to say: the text is empty")
-    if not espeak_available():
-        raise RuntimeError("espeak-ng is not installed (Debian: apt install espeak-ng)")
-    wav = subprocess.run([ESPEAK, "--stdout", "-v", voice.name, "-s", str(voice.speed),
-                          "-p", str(voice.pitch), text],
-                         capture_output=True, check=True).stdout
+    if not engine_available(voice.engine):
+        raise RuntimeError(f"{voice.engine} is not installed (Debian: apt install "
+                           f"{DEBIAN_PACKAGES[voice.engine]})")
+    return _spoken(" ".join(text.split()), voice).astype(np.float64)
+
+
+@lru_cache(maxsize=1024)
+def _spoken(text: str, voice: Voice) -> np.ndarray:
+    wav = {"espeak-ng": _espeak, "flite": _flite, "festival": _festival}[voice.engine](
+        text, voice)
     with wave.open(io.BytesIO(wav)) as w:
         rate = w.getframerate()
         samples = np.frombuffer(w.readframes(w.getnframes()), np.int16)
-    return to_float_audio(samples, rate)
+    return to_float_audio(samples, rate).astype(np.float32)
+
+
+def _espeak(text: str, voice: Voice) -> bytes:
+    pitch = int(round(min(99.0, max(0.0, 50 + 6 * voice.pitch))))
+    return subprocess.run(["espeak-ng", "--stdout", "-v", voice.name, "-s",
+                           str(int(round(160 * voice.rate))), "-p", str(pitch), text],
+                          capture_output=True, check=True).stdout
+
+
+def _flite(text: str, voice: Voice) -> bytes:
+    f0 = FLITE_OWN_F0_HZ[voice.name] * 2 ** (voice.pitch / 12)
+    with tempfile.NamedTemporaryFile(suffix=".wav") as out:
+        subprocess.run(["flite", "-voice", voice.name, "--setf",
+                        f"duration_stretch={1 / voice.rate:.4f}", "--setf",
+                        f"int_f0_target_mean={f0:.1f}", "-t", text, "-o", out.name],
+                       capture_output=True, check=True)
+        return out.read()
+
+
+def _festival(text: str, voice: Voice) -> bytes:
+    setup = [f"(voice_{FESTIVAL_VOICES[voice.name]})"]
+    if voice.name == "slt":       # HTS: hts_engine's own speed
+        setup.append(f"(set! hts_engine_params (append hts_engine_params "
+                     f"'((\"-r\" {voice.rate:.4f}))))")
+    else:
+        f0 = FESTIVAL_DIPHONE_F0_HZ * 2 ** (voice.pitch / 12)
+        setup += [f"(Parameter.set 'Duration_Stretch {1 / voice.rate:.4f})",
+                  f"(set! int_lr_params (cons (list 'target_f0_mean {f0:.1f}) "
+                  f"int_lr_params))"]
+    with tempfile.NamedTemporaryFile(suffix=".wav") as out:
+        command = ["text2wave", "-o", out.name]
+        for expression in setup:
+            command += ["-eval", expression]
+        subprocess.run(command, input=text.encode(), capture_output=True, check=True)
+        return out.read()
 
 
 def padded(x: np.ndarray, seconds: float = 0.3) -> np.ndarray:

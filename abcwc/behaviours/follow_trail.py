@@ -79,23 +79,9 @@ class Trail:
         far = np.flatnonzero(np.hypot(*(ahead - at).T) >= lookahead)
         return ahead[far[0]].copy() if len(far) else ahead[-1].copy()
 
-    def turns_ahead(self, at: tuple[float, float], heading: float, within: float
-                    ) -> tuple[np.ndarray, np.ndarray]:
-        """For the trail's points up to ``within`` m along it from the point nearest
-        ``at``: the m along the trail to each (from ``at``), and how far (rad, 0 to pi)
-        the way on from each point turns from ``heading`` (rad): where a chair now
-        facing ``heading`` has to have turned by."""
-        k = self.nearest(at)
-        ahead = self.points[k:]
-        if len(ahead) < 2:
-            return np.zeros(0), np.zeros(0)
-        steps = np.diff(ahead, axis=0)
-        along = math.hypot(*(ahead[0] - at)) + np.concatenate([[0.0], np.cumsum(
-            np.hypot(*steps.T))[:-1]])
-        turn = np.abs((np.arctan2(steps[:, 1], steps[:, 0]) - heading + math.pi)
-                      % (2 * math.pi) - math.pi)
-        keep = along <= within
-        return along[keep], turn[keep]
+    def ahead_of(self, at: tuple[float, float]) -> np.ndarray:
+        """(K, 2) the trail's points from the one nearest ``at`` to its end."""
+        return self.points[self.nearest(at):]
 
 
 __all__ = ["Trail"]

@@ -336,8 +336,11 @@ class TagFollower(BehaviourBase):
         candidates = self.others.detect(scan, sensor)
         s = self.settings
         # round the tag's point it is her (no speed to judge); round the prediction,
-        # only at a walking person's speed
+        # only at a walking person's speed, and only with no one else walking near
         around, dt = (named, 0.0) if named is not None else (self.track, now - self._updated)
+        if named is None and self._someone_else_near():
+            self.refused["someone else near"] = self.refused.get("someone else near", 0) + 1
+            return None
         chosen, why = self.identity.choose(candidates, around, self.velocity, dt, s.beta)
         if chosen is None and why == "none near":
             # her returns run into a door's frame (one blob too wide for a person): the
@@ -347,6 +350,21 @@ class TagFollower(BehaviourBase):
         if chosen is None:
             self.refused[why] = self.refused.get(why, 0) + 1
         return chosen
+
+    def _someone_else_near(self) -> bool:
+        """Whether a walking person other than her (the others' tracks that have
+        walked, less the one nearest her track) is within ``gate`` m plus a person's
+        width of her track: one who crosses her way or hides her, when the lidar alone
+        cannot tell them apart."""
+        s = self.settings
+        discs = self._walked()
+        if self.track is None or not len(discs):
+            return False
+        gaps = np.hypot(*(discs[:, :2] - self.track).T)
+        nearest = int(np.argmin(gaps))
+        if gaps[nearest] <= s.gate:
+            gaps[nearest] = np.inf  # hers
+        return bool((gaps <= s.gate + 2 * s.person_radius).any())
 
     def _near_returns(self, scan: LaserScan, sensor: Pose2D, around: np.ndarray
                       ) -> np.ndarray:

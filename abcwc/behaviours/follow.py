@@ -607,9 +607,9 @@ class TagFollower(BehaviourBase):
     def _back_off(self, frame: SensorFrame, local: Costmap, ahead: np.ndarray,
                   alongside: np.ndarray) -> Twist:
         """Reverse ``back_off_distance`` m (measured by the odometry) at
-        ``back_off_speed`` while the range sensors behind, the costmap and everyone's
-        predicted way (people behind as they walk, here) leave room; else stop and
-        wait."""
+        ``back_off_speed`` while the range sensors behind, the costmap (the way must not
+        take the chair nearer to what it sees) and everyone's predicted way (people
+        behind as they walk, here) leave room; else stop and wait."""
         assert self._backing is not None
         s = self.settings
         since, start = self._backing
@@ -619,7 +619,7 @@ class TagFollower(BehaviourBase):
         people = np.vstack([ahead, alongside]).reshape(-1, 5)
         room = (behind > self.stopping.braking_distance(s.back_off_speed)
                 + s.back_off_distance - moved
-                and bool(self.planner.check(local, Pose2D(), back).valid[0])
+                and self._gets_away(local, back)
                 and (not len(people) or self.planner.people_gap(
                     Pose2D(), back, people, s.people_horizon)[0] > s.people_margin))
         limit = 3 * s.back_off_distance / s.back_off_speed
@@ -628,6 +628,16 @@ class TagFollower(BehaviourBase):
             return Twist(0.0, 0.0)
         self.state = "backing off"
         return Twist(-s.back_off_speed, 0.0)
+
+    def _gets_away(self, local: Costmap, sample: np.ndarray) -> bool:
+        """Whether the chair's arc for ``sample`` ((1, 2): v, w) is clear in ``local``,
+        or, wedged already nearer than the footprint check allows, at least never
+        brings the footprint's covering circles nearer to what it touches."""
+        check = self.planner.check(local, Pose2D(), sample)
+        if check.valid[0]:
+            return True
+        nearest = check.clearance.min(axis=0)[0]  # (T + 1,): the nearest circle, per pose
+        return bool(np.all(nearest >= nearest[0] - 1e-9) and nearest[-1] > nearest[0])
 
     def _walked(self) -> np.ndarray:
         """(M, 5) the moving discs of the others' tracks that have walked

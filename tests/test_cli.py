@@ -92,7 +92,8 @@ def test_version_is_the_packages():
 
 def test_every_command_takes_quiet_and_debug_and_the_figures_ones_json():
     minimal = {"demo": [], "bench": [], "course build": [], "posegraph": ["g.g2o"],
-               "slam": ["log.clf"], "navtrial": [], "errands": [], "dashboard": []}
+               "slam": ["log.clf"], "navtrial": [], "followtrial": [], "errands": [],
+               "dashboard": []}
     parser = build_parser()
     for command, needed in minimal.items():
         args = parser.parse_args([*command.split(), *needed, "--quiet", "--debug"])

@@ -536,13 +536,20 @@ class TagFollower(BehaviourBase):
             return wanted
         s = self.settings
         ahead, alongside = self._people_in_base()
+        # the person followed and the others walking are moving discs, judged as such
+        # (below), not walls: their returns leave the map (as the navigator's do)
+        sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
+        theirs = scan.hits()
+        ends = transform_points(sensor, scan.points())
+        walking = self._walked()[:, :2]
+        if len(walking):
+            theirs[theirs] = (np.hypot(*(ends[:, None, :] - walking[None]).transpose(2, 0, 1))
+                              <= s.person_radius + 0.1).any(axis=1)
+        else:
+            theirs[:] = False
         if self.track is not None and self._updated >= frame.t - s.lost_after:
-            # the person followed is a moving disc, not a wall: their returns leave the map
-            sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
-            theirs = scan.hits()
-            ends = transform_points(sensor, scan.points())
-            theirs[theirs] = np.hypot(*(ends - self.track).T) <= s.gate
-            scan = replace(scan, ranges=np.where(theirs, np.nan, scan.ranges))
+            theirs[scan.hits()] |= np.hypot(*(ends - self.track).T) <= s.gate
+        scan = replace(scan, ranges=np.where(theirs, np.nan, scan.ranges))
         local = Costmap.rolling_window(Pose2D(), s.local_size, 0.05, default=FREE_SPACE)
         local.add_scan(scan, self.params.lidar.mount, obstacle_range=s.local_size / 2,
                        raytrace_range=s.local_size / 2)
@@ -594,13 +601,13 @@ class TagFollower(BehaviourBase):
         ``alongside`` or behind (where they stand: module notes)."""
         s = self.settings
         valid = np.ones(len(samples), dtype=bool)
-        if len(ahead):
-            valid &= self.planner.people_gap(Pose2D(), samples, ahead,
-                                             s.people_horizon) > s.people_margin
-        if len(alongside):
-            still = standing_still(alongside)
-            now = float(self.planner.people_gap(Pose2D(), np.zeros((1, 2)), still, 0.0)[0])
-            valid &= self.planner.people_gap(Pose2D(), samples, still, s.people_horizon
+        for discs in (ahead, standing_still(alongside)):
+            if not len(discs):
+                continue
+            # someone already nearer than the margin (walking past close by): a command
+            # that takes the chair no nearer is no worse than standing
+            now = float(self.planner.people_gap(Pose2D(), np.zeros((1, 2)), discs, 0.0)[0])
+            valid &= self.planner.people_gap(Pose2D(), samples, discs, s.people_horizon
                                              ) > min(s.people_margin, now) - 1e-3
         return valid
 

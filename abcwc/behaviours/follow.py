@@ -153,6 +153,7 @@ class FollowSettings:
     trust_lidar_for: float = 10.0  # s after the tag was last read
     max_person_speed: float = 1.6  # m/s: a lidar update faster than this is someone else
     clear_of_line: float = 0.15  # m the straight way to her must be clear beside the chair
+    settle: int = 3  # decisions the way must stay clear (or not) to change the aim
     lookahead: float = 0.5  # m from the axle to the point on the trail steered for
     trail_spacing: float = 0.1  # m between the trail's points
     patience: float = 1.0  # s blocked before backing off
@@ -223,6 +224,8 @@ class TagFollower(BehaviourBase):
         self.refused: dict[str, int] = {}  # lidar candidates the identity gate refused, why
         self._blocked_since: float | None = None
         self._scan_points: np.ndarray | None = None  # the newest scan's returns (odom)
+        self._on_trail = False  # steering along her trail (not straight at her)
+        self._unsettled = 0  # decisions running the way's state has disagreed with that
         self._first_seen: dict[int, np.ndarray] = {}  # others' tracks: where first seen
         self._backing: tuple[float, Pose2D] | None = None  # (since, from) while backing off
         self.track: np.ndarray | None = None  # the person's centre (odom, m)
@@ -440,9 +443,22 @@ class TagFollower(BehaviourBase):
             return target, straight
         pivot = np.array([self.pose.x, self.pose.y])
         ahead = np.vstack([self.trail.ahead_of((pivot[0], pivot[1])), target])
+        # the aim changes between her and the trail only when the straight way has been
+        # clear (or not) for ``settle`` decisions running: a way at the edge of clear
+        # would switch the aim to and fro with the scan's noise, and the turn with it
         clear = self._clear_ways(pivot, ahead)
-        if clear.all():
+        if clear.all() == self._on_trail:
+            self._unsettled += 1
+            if self._unsettled >= self.settings.settle:
+                self._on_trail, self._unsettled = not self._on_trail, 0
+        else:
+            self._unsettled = 0
+        if not self._on_trail:
             return target, straight
+        if clear.all():  # on the trail a moment longer: pure pursuit along it
+            at = (float(pivot[0]), float(pivot[1]))
+            return (self.trail.carrot(at, self.settings.lookahead),
+                    self.trail.length_from(at, to=target))
         k = max(int(np.argmin(clear)) - 1, 0)
         steps = float(np.hypot(*np.diff(ahead[k:], axis=0).T).sum())
         return ahead[k], float(math.hypot(*(ahead[k] - pivot))) + steps

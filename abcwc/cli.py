@@ -455,7 +455,7 @@ def build_parser() -> argparse.ArgumentParser:
     navtrial.set_defaults(run=_navtrial)
     followtrial = commands.add_parser(
         "followtrial", help="the tag follower and A.13's behind Ana in the lab and the "
-                            "building, judged by ground truth")
+                            "building, judged by ground truth", parents=common)
     followtrial.add_argument("--seeds", type=int, default=3)
     followtrial.add_argument("--world", default="all", choices=["all", "lab", "building"])
     _json_option(followtrial)

@@ -30,13 +30,17 @@ than ``gate`` m from the track means the track was on someone else: it starts ag
 from the tag. Each update adds the track's point to the person's
 :class:`~abcwc.behaviours.follow_trail.Trail`.
 
-**The way she went.** Where the straight way from the chair to her is clear of the
-scan's returns by the chair's half width and ``clear_of_line`` m, the chair aims at her
-(below). Where it is not (she has turned through a door, round a corner or a table),
-it drives along her trail instead: pure pursuit of the trail point ``lookahead`` m from
-its axle, the gap measured along the trail, and no faster at each corner of the trail
-than the turn rate allows (:meth:`TagFollower._corner_speed`), so that it goes through
-a door where she did instead of cutting across its frame to her.
+**The way she went.** Where the straight way from the chair's axle to her is clear of
+the scan's returns by the chair's half width and ``clear_of_line`` m, the chair aims at
+her (below). Where it is not (she has turned through a door, round a corner or a table),
+it steers along her trail instead: for the farthest trail point the straight way to
+which is clear, the gap measured along that way and the trail beyond it, and no faster
+than lets it turn the trail's corner at that point (:meth:`TagFollower._corner_speed`);
+so it goes through a door where she did instead of cutting across its frame to her. The
+aim changes between her and the trail only after the way has been clear (or not) for
+``settle`` decisions running (meanwhile, on the trail, it pursues the trail point
+``lookahead`` m ahead): a way at the edge of clear would switch the aim, and the turn,
+to and fro with the scan's noise.
 
 **Range and bearing.** With ``range`` and ``alpha`` the person's distance and bearing
 from the chair's camera::
@@ -206,6 +210,9 @@ class TagFollower(BehaviourBase):
                         max_vel_theta=s.max_turn_rate, vx_samples=8, vtheta_samples=21)
         self.planner = DwaPlanner(chair_footprint(p), nav, local, padding=s.padding,
                                   braking_delay=self.stopping.reaction_time)
+        if not (isinstance(s.settle, int) and s.settle >= 1):
+            raise ValueError(f"settle must be a whole number of decisions >= 1, got "
+                             f"{s.settle!r}")
         self.identity = IdentityGate(s.gate, s.max_person_speed)
         self.front = float(np.asarray(p.footprint, dtype=float)[:, 0].max())  # m, base_link
         self.reset()
@@ -434,9 +441,10 @@ class TagFollower(BehaviourBase):
 
     def _carrot(self, target: np.ndarray) -> tuple[np.ndarray, float]:
         """The point to steer for and the length (m) of the way to ``target`` through
-        it: ``target`` itself and the camera's distance to it if the straight way from
-        the axle is clear (:meth:`_clear_ways`); else the last trail point before the
-        first one the way to which is not, and the way's length from the axle."""
+        it: ``target`` itself and the camera's distance to it while the straight way
+        from the axle is clear (:meth:`_clear_ways`); else the last trail point before
+        the first one the way to which is not, and the way's length from the axle
+        (module notes: the aim changes after ``settle`` decisions)."""
         camera = self._camera()
         straight = math.hypot(target[0] - camera.x, target[1] - camera.y)
         if not len(self.trail):

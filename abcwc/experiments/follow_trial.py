@@ -1,17 +1,27 @@
-"""The follower's trial: a person with a tag walks two minutes round the lab, the chair
-follows.
+"""The follower's trials: a person with a tag walks two minutes round the lab, or 55 s
+through a building, the chair follows.
 
 Ana wears a :class:`~abcwc.perception.tags.FollowCard` on her back and walks a loop of
 the lab at 0.7 m/s, round both tables, with six turns of 90 degrees or more; Ben, who
 wears nothing, hurries (1.2 m/s) back and forth across her way, between her and the
 chair, three times in the two minutes, so the chair loses sight of her and must wait
 for him. The chair starts 1.2 m behind her with the lidar and the colour camera (grey)
-on. The simulator's ground truth only *judges* the follower:
+on. In the building (``data/worlds/building.json``: a corridor 2 m wide that turns north
+at its east end, rooms on both sides behind 0.9 m doors) she walks along the corridor,
+into the north room by one door and out by the other, into the south room and out, and
+round the corner; Carl overtakes the chair from behind at 1.3 m/s, and Dora crosses the
+corridor between the chair and her, through the door she takes (:func:`building_follow_world`;
+nothing in the follower is set for this building). The simulator's ground truth only
+*judges* the follower:
 
 * ``distance``: from the camera to the card on Ana's back (m), every 0.1 s;
 * ``seen``: whether the follower read the tag in that decision;
 * ``collisions``: pymunk contacts of the chair with a wall or a person;
-* ``closest_person``: the smallest gap (m) between the chair's outline and a person.
+* ``closest_person``: the smallest gap (m) between the chair's outline and a person;
+* the longest stop with the way clear (:meth:`FollowResult.longest_needless_stop`).
+
+``abcwc followtrial`` runs both trials on three seeds, with A.13's follower on the same
+walks (:func:`run_trial_in`, :func:`trials_table`).
 """
 
 from __future__ import annotations

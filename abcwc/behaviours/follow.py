@@ -34,10 +34,10 @@ from the tag. Each update adds the track's point to the person's
 the scan's returns by the chair's half width and ``clear_of_line`` m, the chair aims at
 her (below). Where it is not (she has turned through a door, round a corner or a table),
 it steers along her trail instead: for the farthest trail point the straight way to
-which is clear (but no nearer than ``lookahead`` m beyond the trail's point nearest the
-axle: a chair that has come off her trail would otherwise aim beside or behind itself
-and turn away from her), the gap measured along that way and the trail beyond it, and
-no faster
+which is clear (or, if the way to it is clear too, the first one ``lookahead`` m beyond
+the trail's point nearest the axle: a chair that has come off her trail would otherwise
+aim beside or behind itself and turn away from her), the gap measured along that way
+and the trail beyond it, and no faster
 than lets it turn the trail's corner at that point (:meth:`TagFollower._corner_speed`);
 so it goes through a door where she did instead of cutting across its frame to her. The
 aim changes between her and the trail only after the way has been clear (or not) for
@@ -476,7 +476,8 @@ class TagFollower(BehaviourBase):
         # chair off her trail would aim beside or behind itself, away from her)
         reach = np.hypot(*(ahead - pivot).T)
         far = reach >= self.settings.lookahead + reach[0]
-        k = max(k, int(np.argmax(far)) if far.any() else len(ahead) - 1)
+        if far.any() and clear[int(np.argmax(far))]:
+            k = max(k, int(np.argmax(far)))
         steps = float(np.hypot(*np.diff(ahead[k:], axis=0).T).sum())
         return ahead[k], float(math.hypot(*(ahead[k] - pivot))) + steps
 

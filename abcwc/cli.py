@@ -1,11 +1,11 @@
-"""The abcwc command: demo, bench, posegraph, slam, navtrial, errands, dashboard and course
-build.
+"""The abcwc command: demo, bench, posegraph, slam, navtrial, followtrial, errands,
+dashboard and course build.
 
 Every command takes the same few options:
 
 - ``--quiet``: no progress bars (they are on by default and go to stderr);
 - ``--json``: the figures as one JSON object on stdout instead of text (every command
-  that prints figures: demo, bench, posegraph, slam, navtrial, errands);
+  that prints figures: demo, bench, posegraph, slam, navtrial, followtrial, errands);
 - ``--out DIR``: a folder, created when the command writes into it (demo, posegraph, slam);
 - ``--debug``: an error shows its traceback.
 
@@ -269,6 +269,28 @@ def _navtrial(args: argparse.Namespace) -> int:
     return 0
 
 
+def _followtrial(args: argparse.Namespace) -> int:
+    """The tag follower's trials (lab, building), seeds 0..n-1, with A.13's follower on
+    the same walks."""
+    from abcwc.experiments.follow_trial import TRIAL_WORLDS, run_trial_in, trials_table
+
+    if args.seeds < 1:
+        raise ValueError(f"--seeds must be at least 1, got {args.seeds}")
+    worlds = TRIAL_WORLDS if args.world == "all" else (args.world,)
+    results = {}
+    for where in worlds:
+        for seed in range(args.seeds):
+            for who, thesis in (("tag", False), ("A.13", True)):
+                results[(where, who, seed)] = run_trial_in(where, seed, thesis)
+    if args.json:
+        _print_json({"runs": [{"world": where, "follower": who, "seed": seed,
+                               **result.figures()}
+                              for (where, who, seed), result in results.items()]})
+    else:
+        print(trials_table(results))
+    return 0
+
+
 def _errands(args: argparse.Namespace) -> int:
     """The capstone's trial: errands to seeded random places from the chair's own map."""
     from abcwc.experiments.errand import errands_table, run_errands
@@ -432,6 +454,13 @@ def build_parser() -> argparse.ArgumentParser:
     navtrial.add_argument("--no-people", action="store_true", help="without walking people")
     _json_option(navtrial)
     navtrial.set_defaults(run=_navtrial)
+    followtrial = commands.add_parser(
+        "followtrial", help="the tag follower and A.13's behind Ana in the lab and the "
+                            "building, judged by ground truth", parents=common)
+    followtrial.add_argument("--seeds", type=int, default=3)
+    followtrial.add_argument("--world", default="all", choices=["all", "lab", "building"])
+    _json_option(followtrial)
+    followtrial.set_defaults(run=_followtrial)
 
     errands = commands.add_parser(
         "errands", parents=common,

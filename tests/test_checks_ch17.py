@@ -75,7 +75,7 @@ def test_law_check_passes_an_independent_law(capsys):
 
 
 @pytest.mark.parametrize(("wrong", "fragment"), [
-    (lambda gap, bearing, receding: (0.5, 0.0), "gave up"),  # blind: a fixed command
+    (lambda gap, bearing, receding: (0.5, 0.0), "lags"),  # blind: a fixed command
     (lambda gap, bearing, receding: (1.2 * gap, 1.5 * bearing), "lags"),  # no feed-forward
     # figure 50: a fixed turn rate either way, however small the bearing
     (lambda gap, bearing, receding: (min(1.0, 1.2 * gap + receding),
@@ -94,3 +94,43 @@ def test_law_check_refuses_abcwc_s_own_law(capsys):
 
     own = TagFollower(FollowCard("ana", 7), GyroOdometry()).range_and_bearing
     assert_not_yet(ch17.law_check(own), capsys, "abcwc's own")
+
+
+def student_aim_clearance(chair, person, frame_end, *, whole_line=False, ends=False,
+                          squared=False):
+    """Parametrised by the fraction along the way, as a student derives it."""
+    (x0, y0), (x1, y1), (px, py) = chair, person, frame_end
+    dx, dy = x1 - x0, y1 - y0
+    t = ((px - x0) * dx + (py - y0) * dy) / (dx * dx + dy * dy)
+    if not whole_line:
+        t = min(1.0, max(0.0, t))
+    if ends:
+        return min(math.dist(chair, frame_end), math.dist(person, frame_end))
+    gap2 = (px - x0 - t * dx) ** 2 + (py - y0 - t * dy) ** 2
+    return gap2 if squared else math.sqrt(gap2)
+
+
+def test_aim_check_passes_an_independent_answer(capsys):
+    assert_pass(ch17.aim_check(student_aim_clearance), capsys)
+
+
+def test_the_aim_clearance_worked_by_hand():
+    """The way from (0, 0) to (2, 0): a point 1 m above its middle is 1 m off; one 1 m
+    behind the chair's end is sqrt(1 + 1) off, though the line passes 1 m from it."""
+    assert ch17.reference_aim_clearance((0, 0), (2, 0), (1, 1)) == pytest.approx(1.0)
+    assert ch17.reference_aim_clearance((0, 0), (2, 0), (-1, 1)) == pytest.approx(
+        math.sqrt(2))
+
+
+@pytest.mark.parametrize(("wrong", "fragment"), [
+    (lambda c, p, f: student_aim_clearance(c, p, f, whole_line=True), "whole line"),
+    (lambda c, p, f: student_aim_clearance(c, p, f, ends=True), "nearer end"),
+    (lambda c, p, f: student_aim_clearance(c, p, f, squared=True), "square root"),
+    (lambda c, p, f: student_aim_clearance(c, p, f) + 0.01, "keep the projection"),
+    (lambda c, p, f: (1.0, 2.0), "one distance"),
+    (not_written, "NotImplementedError"),
+    (ch17.reference_aim_clearance, "abcwc's own"),
+])
+def test_aim_check_refuses_plausible_slips(wrong, fragment, capsys):
+    assert_not_yet(ch17.aim_check(wrong), capsys, fragment)
+

@@ -61,7 +61,7 @@ def test_demo_shows_a_progress_bar_unless_quiet(tmp_path, capsys):
 def test_demo_refuses_unknown_world(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path / "out"), "--world", "moon", "--quiet"]) == 2
     assert capsys.readouterr().err == (
-        "abcwc: error: unknown world 'moon'; available: floor, lab "
+        "abcwc: error: unknown world 'moon'; available: building, floor, lab "
         "(or give a path to a .json world file)\n")
     assert not (tmp_path / "out").exists()  # nothing written for a bad world
 
@@ -92,7 +92,8 @@ def test_version_is_the_packages():
 
 def test_every_command_takes_quiet_and_debug_and_the_figures_ones_json():
     minimal = {"demo": [], "bench": [], "course build": [], "posegraph": ["g.g2o"],
-               "slam": ["log.clf"], "navtrial": [], "errands": [], "dashboard": []}
+               "slam": ["log.clf"], "navtrial": [], "followtrial": [], "errands": [],
+               "dashboard": []}
     parser = build_parser()
     for command, needed in minimal.items():
         args = parser.parse_args([*command.split(), *needed, "--quiet", "--debug"])

@@ -8,6 +8,7 @@ import pytest
 
 from abcwc.behaviours.base import Status
 from abcwc.behaviours.follow import FollowSettings, TagFollower
+from abcwc.behaviours.follow_identity import IdentityGate
 from abcwc.estimation.gyro import GyroOdometry
 from abcwc.experiments.follow_trial import run_follow_trial
 from abcwc.geometry import compose
@@ -99,3 +100,78 @@ def test_bad_settings_are_refused():
         TagFollower(card, GyroOdometry(), settings=FollowSettings(distance=0.0))
     with pytest.raises(ValueError, match="k_turn"):
         TagFollower(card, GyroOdometry(), settings=FollowSettings(k_turn=math.nan))
+
+
+# ---------------------------------------------------------------- the trail, the gate, people
+def corridor_world(people: list[dict]) -> object:
+    """A corridor 2 m wide and 16 m long, a room to its north behind a 0.9 m door
+    (x 6.55-7.45), the chair at its west end facing east."""
+    return world_from_dict({
+        "name": "corridor", "walls": [
+            [[0, 2], [0, 0], [16, 0], [16, 2], [7.45, 2]], [[6.55, 2], [0, 2]],
+            [[4, 2], [4, 6], [10, 6], [10, 2]]],
+        "places": {"start": [1.0, 1.0, 0.0]}, "people": people})
+
+
+def follow_in(world, seconds: float) -> tuple[SimBase, TagFollower, list]:
+    chair = SimBase(world, lidar=True, camera="gray")
+    follower = TagFollower(chair.walkers[0].spec.tag, GyroOdometry(params=chair.params),
+                           chair.params)
+    poses = []
+    frame = chair.read()
+    for _ in range(round(seconds / chair.period)):
+        chair.send(follower(frame), follower.decided_at)
+        frame = chair.step()
+        poses.append((chair.pose.x, chair.pose.y))
+    return chair, follower, np.array(poses)
+
+
+ANA = {"name": "ana", "speed": 0.7, "loop": False,
+       "tag": {"text": "ana", "marker_id": 7}}
+
+
+def test_the_trail_takes_the_chair_through_a_side_door_not_across_its_frame():
+    """Ana turns 90 degrees into a 0.9 m door; the chair goes where she went: through
+    the door's middle, touching nothing (aiming at her would cross the frame)."""
+    ana = {**ANA, "path": [[2.2, 1.0], [7.0, 1.0], [7.0, 4.5]]}
+    chair, follower, poses = follow_in(corridor_world([ana]), 20.0)
+    assert chair.collisions == 0
+    assert poses[-1, 1] > 2.4  # in the room
+    in_door = poses[np.abs(poses[:, 1] - 2.0) < 0.05]
+    assert len(in_door) and np.abs(in_door[:, 0] - 7.0).max() < 0.15  # the door's middle
+    assert follower.status is not Status.FAILED
+
+
+def test_someone_walking_up_from_behind_does_not_stop_the_chair():
+    """Carl overtakes at 1.3 m/s from behind, 0.6 m to the side: the chair keeps
+    following, never standing more than 0.3 s once under way (judged where he stands,
+    and by his motion once ahead, he is never a block)."""
+    ana = {**ANA, "path": [[2.2, 1.1], [15.0, 1.1]]}
+    carl = {"name": "carl", "speed": 1.3, "loop": False, "path": [[-2.0, 0.5], [15.0, 0.5]]}
+    world = corridor_world([ana, carl])
+    chair, follower, poses = follow_in(world, 12.0)
+    assert chair.collisions == 0
+    assert poses[-1, 0] > 7.5  # kept up with Ana (she is at 9.9 m by then)
+    standing = np.array([row[3] for row in follower.log])[20:] < 0.05  # once under way
+    longest = max((len(run) for run in "".join("s" if s else "." for s in standing).split(".")),
+                  default=0)
+    assert longest <= 3, longest  # decisions at 10 Hz
+
+
+def test_the_identity_gate_refuses_a_jump_to_a_passer_by():
+    """A track at 0.9 m/s does not take a blob 0.45 m ahead of its prediction 0.1 s on
+    (its velocity would become 0.9 + 0.2 / 0.1 * 0.45 = 1.8 m/s), nor one of two blobs
+    inside its gate; a step at walking pace is taken."""
+    gate = IdentityGate(gate=0.5, max_speed=1.6)
+    track, velocity = np.array([5.0, 1.0]), np.array([0.7, 0.0])
+    step, why = gate.choose(np.array([[5.07, 1.0], [8.0, 1.0]]), track, velocity, 0.1, 0.2)
+    assert why == "taken" and np.allclose(step, [5.07, 1.0])
+    fast = np.array([0.9, 0.0])
+    assert gate.choose(np.array([[5.45, 1.0]]), track, fast, 0.1, 0.2) == (None, "too fast")
+    assert gate.choose(np.array([[5.3, 1.0]]), track, velocity, 0.1, 0.2)[1] == "taken"
+    assert gate.choose(np.array([[5.05, 1.0], [5.0, 1.4]]), track, velocity, 0.1, 0.2
+                       ) == (None, "two near")
+    assert gate.choose(np.array([[6.0, 1.0]]), track, velocity, 0.1, 0.2) == (None,
+                                                                              "none near")
+    with pytest.raises(ValueError, match="max_speed"):
+        IdentityGate(max_speed=0.0)

@@ -17,13 +17,33 @@ odom frame through the chair's own odometry (wheels and gyro: a pose estimator,
 **Tracking.** The tag says *who*; the lidar says *where*, ten times a second, also when
 the card on the person's back has turned too far from the camera to be read (round a
 corner) or is out of the camera's 57 degrees. The person's centre (the tag's point
-pushed ``person_radius`` m on along the line of sight; or the mean of the lidar's
-returns within ``gate`` m of the prediction, pushed ``2 r / pi`` away from the sensor,
-where a half disc's arc has its centroid) feeds an alpha-beta filter of position and
-velocity in the odom frame, as :class:`~abcwc.navigation.people.PeopleTracker` tracks
-people. Lidar returns are taken only while the tag was read within ``trust_lidar_for``
-s (it is the tag that names the person), and only as a compact blob (at most
-``max_extent`` m across: not a wall).
+pushed ``person_radius`` m on along the line of sight; or a lidar person candidate, a
+compact blob's mean pushed ``2 r / pi`` away from the sensor, where a half disc's arc has
+its centroid) feeds an alpha-beta filter of position and velocity in the odom frame, as
+:class:`~abcwc.navigation.people.PeopleTracker` tracks people. Lidar candidates are
+taken only while the tag was read within ``trust_lidar_for`` s (it is the tag that
+names the person), and only through the
+:class:`~abcwc.behaviours.follow_identity.IdentityGate`: the one candidate within
+``gate`` m of the prediction whose update keeps the track under ``max_person_speed``
+(two inside the gate: neither; the track coasts until the tag is read). A tag read more
+than ``gate`` m from the track means the track was on someone else: it starts again
+from the tag. Each update adds the track's point to the person's
+:class:`~abcwc.behaviours.follow_trail.Trail`.
+
+**The way she went.** Where the straight way from the chair's axle to her is clear of
+the scan's returns by the chair's half width and ``clear_of_line`` m, the chair aims at
+her (below). Where it is not (she has turned through a door, round a corner or a table),
+it steers along her trail instead: for the farthest trail point the straight way to
+which is clear (or, if the way to it is clear too, the first one ``lookahead`` m beyond
+the trail's point nearest the axle: a chair that has come off her trail would otherwise
+aim beside or behind itself and turn away from her), the gap measured along that way
+and the trail beyond it, and no faster
+than lets it turn the trail's corner at that point (:meth:`TagFollower._corner_speed`);
+so it goes through a door where she did instead of cutting across its frame to her. The
+aim changes between her and the trail only after the way has been clear (or not) for
+``settle`` decisions running (meanwhile, on the trail, it pursues the trail point
+``lookahead`` m ahead): a way at the edge of clear would switch the aim, and the turn,
+to and fro with the scan's noise.
 
 **Range and bearing.** With ``range`` and ``alpha`` the person's distance and bearing
 from the chair's camera::
@@ -45,10 +65,12 @@ a chair closing on a standing person from 2.5 m overshoots to 0.5 m.
 delay ``T`` allows ``k < pi / (2 T)``, 15.7 1/s).
 
 **Lost.** With neither the tag nor the lidar on the person for ``lost_after`` s the
-chair drives on towards where the person would be by now (the track moved on at its
-last velocity, for at most ``predict_for`` s); once there, or after ``predict_for`` s,
-it turns on the spot towards the side it was last on at ``search_turn_rate`` for up to
-one full turn, then fails, "lost".
+chair drives on along her trail to where she was last seen and on towards where she
+would be by now (the track moved on at its last velocity, for at most ``predict_for``
+s); once there, or after ``seek_for`` s, it turns on the spot towards the side she was
+last on at ``search_turn_rate``, and fails, "lost", after a full turn (counted from the
+odometry's heading: the turn made, not the turn asked for) or after twice the time a
+full turn takes.
 
 **Obstacles.** Every wanted command is checked against a local costmap built from the
 newest lidar scan (``local_size`` m square round the chair, in base_link): the DWA
@@ -57,15 +79,26 @@ wanted command's arc is not clear, the clear one nearest to it is sent (speeds s
 by their limits); with none, the chair stops. The person is in the scan too, so the
 chair never drives into them. Other people are tracked in the scan too (a
 :class:`~abcwc.navigation.people.PeopleTracker` without a map: compact blobs, their
-velocities from an alpha-beta filter), and a command must leave the chair able to stop
-clear of where each will be within ``people_horizon`` s (the DWA planner's
-:meth:`~abcwc.navigation.dwa.DwaPlanner.people_gap`): a passer-by crossing in front is
-waited for, not met. What the body's
-:class:`~abcwc.control.safety.SafetyFilter` will stop for is foreseen with its
+velocities from an alpha-beta filter; a blob counts as a person once it has moved
+``walked`` m, for without a map a door frame's end is a compact blob too). People are
+judged by whether their motion and the chair's can meet, as the navigator's DWA judges
+them: a command must leave the chair able to stop clear of where each person *ahead of
+its front* will be within ``people_horizon`` s
+(:meth:`~abcwc.navigation.dwa.DwaPlanner.people_gap`), so a passer-by crossing in front
+is waited for, not met; a chair that only drives forward meets someone beside or
+behind it only by turning or backing into them, so those are judged where they stand,
+and someone walking up from behind is someone to keep ahead of, not a block. What the
+body's :class:`~abcwc.control.safety.SafetyFilter` will stop for is foreseen with its
 :class:`~abcwc.control.safety.ClearanceCheck`, and the window of commands is centred on
 what the chair is driven at now, read from the frame's pot bytes
 (:func:`~abcwc.control.velocity.pot_command_to_twist`: after the filter's ramp, ahead
 of the wheels' lag); every command then passes the filter in the control loop.
+
+**Recovery.** Asked to move but left only standing (no clear command, or the nearest
+clear one is a stop) for ``patience`` s, the chair backs off ``back_off_distance`` m at
+``back_off_speed`` (measured by the odometry), while the range sensors behind, the
+costmap and everyone's predicted way (people behind as they walk, here) leave room,
+then tries again: the navigator's back-off recovery, for a chair wedged in a doorway.
 """
 
 from __future__ import annotations
@@ -77,13 +110,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from abcwc.behaviours.base import BehaviourBase
+from abcwc.behaviours.follow_identity import IdentityGate
+from abcwc.behaviours.follow_trail import Trail
 from abcwc.control.safety import ClearanceCheck
 from abcwc.control.velocity import pot_command_to_twist
 from abcwc.estimation.estimator import PoseEstimator
 from abcwc.geometry import compose, transform_points, wrap_angle
 from abcwc.navigation.costmap import FREE_SPACE, Costmap, chair_footprint
 from abcwc.navigation.dwa import DwaPlanner
-from abcwc.navigation.people import PeopleTracker
+from abcwc.navigation.people import PeopleTracker, standing_still
 from abcwc.params import ChairParams, default_params, load_navigation_params
 from abcwc.perception.camera import PinholeCamera
 from abcwc.perception.tags import MIN_POSE_SIDE_PX, FollowCard, find_marker
@@ -114,6 +149,7 @@ class FollowSettings:
     braking: float = 0.4  # m/s^2 planned (the safety filter's ramp allows 0.8, with lag)
     lost_after: float = 0.5  # s without a sighting
     predict_for: float = 2.0  # s the person's last velocity is trusted
+    seek_for: float = 5.0  # s for the drive to where the person was last seen
     search_turn_rate: float = 0.5  # rad/s
     min_marker_px: float = MIN_POSE_SIDE_PX  # px across: narrower markers range poorly
     person_radius: float = 0.25  # m from a person's back to their centre
@@ -122,8 +158,17 @@ class FollowSettings:
     alpha: float = 0.5  # the track's position gain
     beta: float = 0.2  # the track's velocity gain
     trust_lidar_for: float = 10.0  # s after the tag was last read
+    max_person_speed: float = 1.6  # m/s: a lidar update faster than this is someone else
+    clear_of_line: float = 0.15  # m the straight way to her must be clear beside the chair
+    settle: int = 3  # decisions the way must stay clear (or not) to change the aim
+    lookahead: float = 0.5  # m from the axle to the point on the trail steered for
+    trail_spacing: float = 0.1  # m between the trail's points
+    patience: float = 1.0  # s blocked before backing off
+    back_off_distance: float = 0.3  # m
+    back_off_speed: float = 0.2  # m/s
     people_horizon: float = 2.0  # s others' paths are predicted for
     people_margin: float = 0.1  # m kept from others' predicted discs
+    walked: float = 0.5  # m a blob must move to count as a walking person
     local_size: float = 5.0  # m, the local costmap's side
     padding: float = 0.05  # m round the footprint in the obstacle check
 
@@ -156,8 +201,9 @@ class TagFollower(BehaviourBase):
         self.params = p = params or default_params()
         self.settings = s = settings or FollowSettings()
         for name in ("distance", "k_gap", "k_turn", "max_speed", "max_turn_rate",
-                     "lost_after", "predict_for", "search_turn_rate", "local_size",
-                     "braking"):
+                     "lost_after", "predict_for", "search_turn_rate", "local_size", "seek_for",
+                     "braking", "lookahead", "trail_spacing", "patience",
+                     "back_off_distance", "back_off_speed"):
             value = getattr(s, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
@@ -167,6 +213,11 @@ class TagFollower(BehaviourBase):
                         max_vel_theta=s.max_turn_rate, vx_samples=8, vtheta_samples=21)
         self.planner = DwaPlanner(chair_footprint(p), nav, local, padding=s.padding,
                                   braking_delay=self.stopping.reaction_time)
+        if not (isinstance(s.settle, int) and s.settle >= 1):
+            raise ValueError(f"settle must be a whole number of decisions >= 1, got "
+                             f"{s.settle!r}")
+        self.identity = IdentityGate(s.gate, s.max_person_speed)
+        self.front = float(np.asarray(p.footprint, dtype=float)[:, 0].max())  # m, base_link
         self.reset()
 
     def reset(self) -> None:
@@ -177,6 +228,16 @@ class TagFollower(BehaviourBase):
         self.state = "searching"
         self._last_image = -math.inf
         self._search_turned, self._searching = 0.0, False
+        self._search_heading: float | None = None  # the odometry's heading last decision
+        self._search_since = -math.inf
+        self.trail = Trail(self.settings.trail_spacing)  # where the person walked (odom)
+        self.refused: dict[str, int] = {}  # lidar candidates the identity gate refused, why
+        self._blocked_since: float | None = None
+        self._scan_points: np.ndarray | None = None  # the newest scan's returns (odom)
+        self._on_trail = False  # steering along her trail (not straight at her)
+        self._unsettled = 0  # decisions running the way's state has disagreed with that
+        self._first_seen: dict[int, np.ndarray] = {}  # others' tracks: where first seen
+        self._backing: tuple[float, Pose2D] | None = None  # (since, from) while backing off
         self.track: np.ndarray | None = None  # the person's centre (odom, m)
         self.velocity = np.zeros(2)  # m/s
         self._t = self._updated = self._tag_read = -math.inf
@@ -203,33 +264,44 @@ class TagFollower(BehaviourBase):
             self._last_image = image.stamp
             seen = self._look(image)
         measured = []
+        named = None  # the person's centre where the tag puts it
         if seen is not None:
             self.sightings.append(seen)
-            centre = self._centre_behind(seen.position)
-            if self.track is None or np.hypot(*(centre - self.track)) > 1.0:
-                self.track, self.velocity = centre, np.zeros(2)  # (re)start on the tag
-            measured.append(centre)
+            named = self._centre_behind(seen.position)
+            if self.track is None or np.hypot(*(named - self.track)) > s.gate:
+                # no track yet, or it was on someone else: start again from the tag,
+                # and forget a trail that may be someone else's
+                self.track, self.velocity = named, np.zeros(2)
+                self._updated = -math.inf
+                self.trail.clear()
+            measured.append(named)
             self._tag_read = frame.t
         scan = frame.readings.get(LIDAR_FRAME)
         if isinstance(scan, LaserScan) and scan.stamp > self._last_scan:
             self._last_scan = scan.stamp
-            self.others.update(scan, compose(self.pose, Pose2D(*self.params.lidar.mount)),
-                               scan.stamp)
+            sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
+            self.others.update(scan, sensor, scan.stamp)
+            self._scan_points = transform_points(sensor, scan.points())
             if self.track is not None and frame.t - self._tag_read <= s.trust_lidar_for:
-                centre = self._lidar_centre(scan)
+                centre = self._lidar_centre(scan, named, frame.t)
                 if centre is not None:
                     measured.append(centre)
         if measured:  # one update a decision: two sources apart would fake a velocity
             self._measured(frame.t, np.mean(measured, axis=0))
+            self.trail.add(self.track)
+        if len(self.trail):
+            self.trail.passed((self.pose.x, self.pose.y))
         if self.track is None:
             wanted = self._search(frame, 1.0)
         elif frame.t - self._updated <= s.lost_after:
             self.state = "following"
-            self._search_turned, self._searching = 0.0, False
-            wanted = self._towards(self.track, self.velocity)
-        elif not self._searching and frame.t - self._updated <= s.lost_after + s.predict_for:
-            self.state = "going where the person was heading"
-            wanted = self._towards(self.track, self.velocity)
+            self._search_turned, self._searching, self._search_heading = 0.0, False, None
+            wanted = self._pursue(self.track, self.velocity, s.distance)
+        elif not self._searching and frame.t - self._updated <= s.lost_after + s.seek_for:
+            # along the trail to where she was last seen, and on to where she would be
+            # by now at her last velocity (for at most predict_for s)
+            self.state = "going to where the person was last seen"
+            wanted = self._pursue(self.track, self.velocity, s.distance)
             self._searching = wanted.v <= 0.02 and abs(wanted.w) <= 0.05  # there: look
         else:
             self._searching = True
@@ -266,19 +338,61 @@ class TagFollower(BehaviourBase):
         away /= max(float(np.hypot(*away)), 1e-9)
         return np.asarray(point) + self.settings.person_radius * away
 
-    def _lidar_centre(self, scan: LaserScan) -> np.ndarray | None:
-        """The person's centre from the lidar returns near the track (module notes), or
-        None if there is no compact blob there."""
-        s = self.settings
+    def _lidar_centre(self, scan: LaserScan, named: np.ndarray | None, now: float
+                      ) -> np.ndarray | None:
+        """The person's centre from the lidar (module notes): the one person candidate
+        the identity gate lets through round the tag's point ``named`` (when the tag
+        was read in this decision) or round the track's prediction; None if none is
+        (the reason counted in :attr:`refused`)."""
+        assert self.track is not None
         sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
-        points = transform_points(sensor, scan.points())
-        near = points[np.hypot(*(points - self.track).T) <= s.gate]
-        if len(near) < 3 or np.ptp(near, axis=0).max() > s.max_extent:
+        candidates = self.others.detect(scan, sensor)
+        s = self.settings
+        # round the tag's point it is her (no speed to judge); round the prediction,
+        # only at a walking person's speed, and only with no one else walking near
+        around, dt = (named, 0.0) if named is not None else (self.track, now - self._updated)
+        if named is None and self._someone_else_near():
+            self.refused["someone else near"] = self.refused.get("someone else near", 0) + 1
             return None
+        chosen, why = self.identity.choose(candidates, around, self.velocity, dt, s.beta)
+        if chosen is None and why == "none near":
+            # her returns run into a door's frame (one blob too wide for a person): the
+            # returns within a person's reach of the point, if they are compact
+            chosen, why = self.identity.choose(self._near_returns(scan, sensor, around),
+                                               around, self.velocity, dt, s.beta)
+        if chosen is None:
+            self.refused[why] = self.refused.get(why, 0) + 1
+        return chosen
+
+    def _someone_else_near(self) -> bool:
+        """Whether a walking person other than her (the others' tracks that have
+        walked, less the one nearest her track) is within ``gate`` m plus a person's
+        width of her track: one who crosses her way or hides her, when the lidar alone
+        cannot tell them apart."""
+        s = self.settings
+        discs = self._walked()
+        if self.track is None or not len(discs):
+            return False
+        gaps = np.hypot(*(discs[:, :2] - self.track).T)
+        nearest = int(np.argmin(gaps))
+        if gaps[nearest] <= s.gate:
+            gaps[nearest] = np.inf  # hers
+        return bool((gaps <= s.gate + 2 * s.person_radius).any())
+
+    def _near_returns(self, scan: LaserScan, sensor: Pose2D, around: np.ndarray
+                      ) -> np.ndarray:
+        """(0 or 1, 2): the centre of the returns within ``person_radius + 0.15`` m of
+        ``around``, pushed ``2 r / pi`` away from the sensor, if there are at least three
+        and they span at most ``2 person_radius`` m."""
+        s = self.settings
+        points = transform_points(sensor, scan.points())
+        near = points[np.hypot(*(points - around).T) <= s.person_radius + 0.15]
+        if len(near) < 3 or np.ptp(near, axis=0).max() > 2 * s.person_radius:
+            return np.zeros((0, 2))
         mean = near.mean(axis=0)
         away = mean - (sensor.x, sensor.y)
         away /= max(float(np.hypot(*away)), 1e-9)
-        return mean + away * 2 * s.person_radius / math.pi
+        return (mean + away * 2 * s.person_radius / math.pi).reshape(1, 2)
 
     def _predict(self, now: float) -> None:
         """Move the track on at its velocity (for at most ``predict_for`` s unseen)."""
@@ -301,22 +415,115 @@ class TagFollower(BehaviourBase):
                                                   self.track[0] - camera.x)
                                        - camera.theta) >= 0 else -1.0
 
-    def _towards(self, centre: np.ndarray, velocity: np.ndarray) -> Twist:
-        """The follow law for a person whose centre is at ``centre`` (odom) moving at
-        ``velocity``: the gap beyond ``distance`` from the camera to their near side,
-        their bearing and how fast they draw away, through :attr:`law`, limited."""
+    def _pursue(self, target: np.ndarray, velocity: np.ndarray, distance: float) -> Twist:
+        """The follow law along the trail to ``target`` (odom, m; the person's centre,
+        moving at ``velocity`` m/s), keeping ``distance`` m (module notes): aimed at her
+        from the camera when the way to her is clear, else at the farthest trail point
+        the way to which is, the gap measured along that way."""
         s = self.settings
         camera = self._camera()
-        dx, dy = centre[0] - camera.x, centre[1] - camera.y
-        distance = math.hypot(dx, dy)
-        bearing = wrap_angle(math.atan2(dy, dx) - camera.theta)
-        receding = max(float(velocity[0] * dx + velocity[1] * dy) / max(distance, 1e-9), 0.0)
-        v, w = self.law(distance - s.person_radius - s.distance, bearing, receding)
+        target = np.asarray(target, dtype=float)
+        carrot, along = self._carrot(target)
+        if carrot is target:  # in plain view: the line of sight, as ever
+            origin = (camera.x, camera.y, camera.theta)
+            cap = math.inf
+        else:
+            origin = (self.pose.x, self.pose.y, self.pose.theta)
+            along -= math.hypot(camera.x - self.pose.x, camera.y - self.pose.y)
+            cap = self._corner_speed(carrot)
+        dx, dy = carrot[0] - origin[0], carrot[1] - origin[1]
+        reach = max(math.hypot(dx, dy), 1e-9)
+        bearing = wrap_angle(math.atan2(dy, dx) - origin[2])
+        receding = max(float(velocity[0] * dx + velocity[1] * dy) / reach, 0.0)
+        v, w = self.law(along - s.person_radius - distance, bearing, receding)
         if not (math.isfinite(v) and math.isfinite(w)):
             raise ValueError(f"the follow law gave ({v!r}, {w!r}): it must give finite "
                              "(v m/s, w rad/s)")
-        return Twist(min(max(float(v), 0.0), s.max_speed),
+        return Twist(min(max(float(v), 0.0), s.max_speed, cap),
                      min(max(float(w), -s.max_turn_rate), s.max_turn_rate))
+
+    def _carrot(self, target: np.ndarray) -> tuple[np.ndarray, float]:
+        """The point to steer for and the length (m) of the way to ``target`` through
+        it: ``target`` itself and the camera's distance to it while the straight way
+        from the axle is clear (:meth:`_clear_ways`); else the last trail point before
+        the first one the way to which is not, and the way's length from the axle
+        (module notes: the aim changes after ``settle`` decisions)."""
+        camera = self._camera()
+        straight = math.hypot(target[0] - camera.x, target[1] - camera.y)
+        if not len(self.trail):
+            return target, straight
+        pivot = np.array([self.pose.x, self.pose.y])
+        ahead = np.vstack([self.trail.ahead_of((pivot[0], pivot[1])), target])
+        # the aim changes between her and the trail only when the straight way has been
+        # clear (or not) for ``settle`` decisions running: a way at the edge of clear
+        # would switch the aim to and fro with the scan's noise, and the turn with it
+        clear = self._clear_ways(pivot, ahead)
+        if clear.all() == self._on_trail:
+            self._unsettled += 1
+            if self._unsettled >= self.settings.settle:
+                self._on_trail, self._unsettled = not self._on_trail, 0
+        else:
+            self._unsettled = 0
+        if not self._on_trail:
+            return target, straight
+        if clear.all():  # on the trail a moment longer: pure pursuit along it
+            at = (float(pivot[0]), float(pivot[1]))
+            off = float(math.hypot(*(ahead[0] - pivot)))
+            return (self.trail.carrot(at, self.settings.lookahead + off),
+                    self.trail.length_from(at, to=target))
+        k = max(int(np.argmin(clear)) - 1, 0)
+        # never a point nearer than the lookahead beyond the trail's nearest point (a
+        # chair off her trail would aim beside or behind itself, away from her)
+        reach = np.hypot(*(ahead - pivot).T)
+        far = reach >= self.settings.lookahead + reach[0]
+        if far.any() and clear[int(np.argmax(far))]:
+            k = max(k, int(np.argmax(far)))
+        steps = float(np.hypot(*np.diff(ahead[k:], axis=0).T).sum())
+        return ahead[k], float(math.hypot(*(ahead[k] - pivot))) + steps
+
+    def _clear_ways(self, start: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """(K,) whether the straight way from ``start`` to each of ``ends`` (odom, m)
+        is clear of the newest scan's returns by the chair's half width and
+        ``clear_of_line`` m (returns within ``gate`` of the track, hers, left out; the
+        last ``person_radius + 0.1`` m of each way, where she stands, not judged)."""
+        s = self.settings
+        if self._scan_points is None or not len(self._scan_points):
+            return np.ones(len(ends), dtype=bool)
+        points = self._scan_points
+        if self.track is not None:
+            points = points[np.hypot(*(points - self.track).T) > s.gate]
+        way = ends - start  # (K, 2)
+        length = np.maximum(np.hypot(*way.T), 1e-9)
+        unit = way / length[:, None]
+        rel = points - start  # (P, 2)
+        along = rel @ unit.T  # (P, K)
+        across = np.abs(rel @ np.column_stack([-unit[:, 1], unit[:, 0]]).T)
+        half = float(np.abs(np.asarray(self.params.footprint, dtype=float)[:, 1]).max())
+        in_the_way = ((along > -0.2) & (along < length - self.settings.person_radius - 0.1)
+                      & (across < half + s.clear_of_line))
+        return ~in_the_way.any(axis=0)
+
+    def _corner_speed(self, carrot: np.ndarray) -> float:
+        """m/s: the fastest the chair may go towards ``carrot`` (a trail point short of
+        her) and still slow, at ``braking``, to the speed at which it can turn the
+        corner there: the way on from the carrot turns by ``phi`` from the way to it,
+        and pure pursuit's turn rate for a goal at ``phi`` is ``w = 2 v sin(phi) / L``
+        (Coulter 1992) with ``L`` the ``lookahead``, so ``max_turn_rate`` holds it to
+        ``v_c = max_turn_rate L / (2 sin phi)`` (the curvature limit of the regulated
+        pure pursuit: Macenski et al., "Regulated pure pursuit for robot path
+        tracking", Autonomous Robots 47, 2023); the carrot ``d`` m away, less ``L``,
+        allows ``sqrt(v_c^2 + 2 braking d)``."""
+        s = self.settings
+        pivot = np.array([self.pose.x, self.pose.y])
+        ahead = self.trail.ahead_of((float(carrot[0]), float(carrot[1])))
+        if len(ahead) < 2:
+            return math.inf
+        beyond = ahead[min(len(ahead) - 1, max(1, round(s.lookahead / s.trail_spacing)))]
+        to, on = carrot - pivot, beyond - carrot
+        phi = abs(wrap_angle(math.atan2(on[1], on[0]) - math.atan2(to[1], to[0])))
+        corner = s.max_turn_rate * s.lookahead / (2 * math.sin(min(phi, math.pi / 2)) + 1e-9)
+        room = max(float(math.hypot(*to)) - s.lookahead, 0.0)
+        return math.sqrt(corner ** 2 + 2 * s.braking * room)
 
     def range_and_bearing(self, gap: float, bearing: float, receding: float
                           ) -> tuple[float, float]:
@@ -333,34 +540,55 @@ class TagFollower(BehaviourBase):
 
     def _search(self, frame: SensorFrame, side: float) -> Twist:
         """Turn on the spot towards ``side`` (+1 left, -1 right); fail after a full
-        turn."""
+        turn, the turn the odometry says was made (not the one asked for), or after
+        twice the time a full turn takes, saying how far it got."""
         s = self.settings
-        if self._search_turned >= 2 * math.pi:
+        heading = self.pose.theta
+        if self._search_heading is None:
+            self._search_heading, self._search_since = heading, frame.t
+        self._search_turned += abs(wrap_angle(heading - self._search_heading))
+        self._search_heading = heading
+        full = 2 * math.pi
+        if self._search_turned >= full:
             self.fail(f"lost: no sight of the person for {frame.t - self._updated:.0f} s, "
                       "and a full turn did not find them")
             return Twist(0.0, 0.0)
+        if frame.t - self._search_since > 2 * full / s.search_turn_rate:
+            self.fail(f"lost: no sight of the person for {frame.t - self._updated:.0f} s; "
+                      f"the search could turn only {math.degrees(self._search_turned):.0f} "
+                      "degrees")
+            return Twist(0.0, 0.0)
         self.state = "searching"
-        self._search_turned += s.search_turn_rate / self.rate_hz
         return Twist(0.0, side * s.search_turn_rate)
 
     def _clear_of_obstacles(self, frame: SensorFrame, wanted: Twist) -> Twist:
-        """``wanted`` if its arc is clear in the local costmap, else the nearest clear
-        command reachable in one cycle, else a stop (module notes)."""
+        """``wanted`` if its arc is clear in the local costmap and of people, else the
+        nearest clear command reachable in one cycle, else a stop; blocked for
+        ``patience`` s, a back-off (module notes)."""
         scan = frame.readings.get(LIDAR_FRAME)
         if not isinstance(scan, LaserScan):
             return wanted
         s = self.settings
-        people = self._people_in_base()
+        ahead, alongside = self._people_in_base()
+        # the person followed and the others walking are moving discs, judged as such
+        # (below), not walls: their returns leave the map (as the navigator's do)
+        sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
+        theirs = scan.hits()
+        ends = transform_points(sensor, scan.points())
+        walking = self._walked()[:, :2]
+        if len(walking):
+            theirs[theirs] = (np.hypot(*(ends[:, None, :] - walking[None]).transpose(2, 0, 1))
+                              <= s.person_radius + 0.1).any(axis=1)
+        else:
+            theirs[:] = False
         if self.track is not None and self._updated >= frame.t - s.lost_after:
-            # the person followed is a moving disc, not a wall: their returns leave the map
-            sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
-            theirs = scan.hits()
-            ends = transform_points(sensor, scan.points())
-            theirs[theirs] = np.hypot(*(ends - self.track).T) <= s.gate
-            scan = replace(scan, ranges=np.where(theirs, np.nan, scan.ranges))
+            theirs[scan.hits()] |= np.hypot(*(ends - self.track).T) <= s.gate
+        scan = replace(scan, ranges=np.where(theirs, np.nan, scan.ranges))
         local = Costmap.rolling_window(Pose2D(), s.local_size, 0.05, default=FREE_SPACE)
         local.add_scan(scan, self.params.lidar.mount, obstacle_range=s.local_size / 2,
                        raytrace_range=s.local_size / 2)
+        if self._backing is not None:
+            return self._back_off(frame, local, ahead, alongside)
         # the pots' bytes read back a little above the speed limit they were rounded from
         moving = (min(self.driven_at.v, s.max_speed),
                   min(max(self.driven_at.w, -s.max_turn_rate), s.max_turn_rate))
@@ -374,37 +602,118 @@ class TagFollower(BehaviourBase):
                                    for v in samples[:, 0]])
         samples[stopped, 0] = 0.0
         valid = self.planner.check(local, Pose2D(), samples).valid
-        if len(people):
-            valid &= self.planner.people_gap(Pose2D(), samples, people,
-                                             s.people_horizon) > s.people_margin
+        valid &= self._clear_of_people(samples, ahead, alongside)
         if valid[0]:
+            self._blocked_since = None
             return Twist(float(samples[0, 0]), float(samples[0, 1]))
-        if not valid.any():
+        best = -1
+        if valid.any():
+            distance = np.hypot((samples[:, 0] - wanted.v) / s.max_speed,
+                                (samples[:, 1] - wanted.w) / s.max_turn_rate)
+            best = int(np.argmin(np.where(valid, distance, np.inf)))
+        # wedged: asked to move, and the nearest clear command is to stand
+        asked = wanted.v > 0.05 or abs(wanted.w) > 0.1
+        standing = best < 0 or (abs(samples[best, 0]) < 0.02 and abs(samples[best, 1]) < 0.05)
+        if asked and standing:
             self.state = "blocked"
+            if self._blocked_since is None:
+                self._blocked_since = frame.t
+            elif frame.t - self._blocked_since >= s.patience:
+                self._blocked_since = None
+                self._backing = (frame.t, self.pose)
+                return self._back_off(frame, local, ahead, alongside)
+        else:
+            self._blocked_since = None
+        if best < 0:
             return Twist(0.0, 0.0)
-        distance = np.hypot((samples[:, 0] - wanted.v) / s.max_speed,
-                            (samples[:, 1] - wanted.w) / s.max_turn_rate)
-        best = int(np.argmin(np.where(valid, distance, np.inf)))
         return Twist(float(samples[best, 0]), float(samples[best, 1]))
 
-
-    def _people_in_base(self) -> np.ndarray:
-        """(M, 5) the people round the chair as DWA's moving discs (x, y, vx, vy,
-        radius) in base_link: the one followed (from the track) and the others tracked
-        in the scan."""
+    def _clear_of_people(self, samples: np.ndarray, ahead: np.ndarray,
+                         alongside: np.ndarray) -> np.ndarray:
+        """(S,) whether each command leaves the chair able to stop clear of the people
+        ``ahead`` (moving discs, predicted) and does not turn or drive into those
+        ``alongside`` or behind (where they stand: module notes)."""
         s = self.settings
+        valid = np.ones(len(samples), dtype=bool)
+        for discs in (ahead, standing_still(alongside)):
+            if not len(discs):
+                continue
+            # someone already nearer than the margin (walking past close by): a command
+            # that takes the chair no nearer is no worse than standing
+            now = float(self.planner.people_gap(Pose2D(), np.zeros((1, 2)), discs, 0.0)[0])
+            valid &= self.planner.people_gap(Pose2D(), samples, discs, s.people_horizon
+                                             ) > min(s.people_margin, now) - 1e-3
+        return valid
+
+    def _back_off(self, frame: SensorFrame, local: Costmap, ahead: np.ndarray,
+                  alongside: np.ndarray) -> Twist:
+        """Reverse ``back_off_distance`` m (measured by the odometry) at
+        ``back_off_speed`` while the range sensors behind, the costmap (the way must not
+        take the chair nearer to what it sees) and everyone's predicted way (people
+        behind as they walk, here) leave room; else stop and wait."""
+        assert self._backing is not None
+        s = self.settings
+        since, start = self._backing
+        moved = math.hypot(self.pose.x - start.x, self.pose.y - start.y)
+        behind, _ = self.stopping.clearance(frame, forward=False)
+        back = np.array([[-s.back_off_speed, 0.0]])
+        people = np.vstack([ahead, alongside]).reshape(-1, 5)
+        room = (behind > self.stopping.braking_distance(s.back_off_speed)
+                + s.back_off_distance - moved
+                and self._gets_away(local, back)
+                and (not len(people) or self.planner.people_gap(
+                    Pose2D(), back, people, s.people_horizon)[0] > s.people_margin))
+        limit = 3 * s.back_off_distance / s.back_off_speed
+        if not room or moved >= s.back_off_distance or frame.t - since > limit:
+            self._backing = None
+            return Twist(0.0, 0.0)
+        self.state = "backing off"
+        return Twist(-s.back_off_speed, 0.0)
+
+    def _gets_away(self, local: Costmap, sample: np.ndarray) -> bool:
+        """Whether the chair's arc for ``sample`` ((1, 2): v, w) is clear in ``local``,
+        or, wedged already nearer than the footprint check allows, at least never
+        brings the footprint's covering circles nearer to what it touches."""
+        check = self.planner.check(local, Pose2D(), sample)
+        if check.valid[0]:
+            return True
+        nearest = check.clearance.min(axis=0)[0]  # (T + 1,): the nearest circle, per pose
+        return bool(np.all(nearest >= nearest[0] - 1e-9) and nearest[-1] > nearest[0])
+
+    def _walked(self) -> np.ndarray:
+        """(M, 5) the moving discs of the others' tracks that have walked
+        ``walked`` m or more from where each was first seen: without a map, the end of a
+        wall at a door is a compact blob too, and its track drifts a little as the chair
+        moves round it; someone standing is in the scan, and so in the costmap."""
+        for track in self.others.tracks:
+            self._first_seen.setdefault(track.track_id, track.position.copy())
+        walked = [track for track in self.others.tracks
+                  if np.hypot(*(track.position - self._first_seen[track.track_id]))
+                  >= self.settings.walked]
         discs = self.others.moving_discs()
+        keep = np.array([track in walked for track in self.others.tracks], dtype=bool)
+        return discs[keep] if len(discs) else discs
+
+    def _people_in_base(self) -> tuple[np.ndarray, np.ndarray]:
+        """Two (M, 5) arrays of DWA's moving discs (x, y, vx, vy, radius) in base_link:
+        the people whose centre is ahead of the chair's front (the one followed, from
+        the track, and the others tracked in the scan), and those beside or behind it.
+        """
+        s = self.settings
+        discs = self._walked()
         if self.track is not None and len(discs):
             discs = discs[np.hypot(*(discs[:, :2] - self.track).T) > s.gate]
         if self.track is not None and self._updated >= self._t - s.lost_after:
             discs = np.vstack([discs, [*self.track, *self.velocity, s.person_radius]])
         if not len(discs):
-            return discs
+            return discs, discs
         c, s_ = math.cos(self.pose.theta), math.sin(self.pose.theta)
         to_base = np.array([[c, s_], [-s_, c]])
         position = (discs[:, :2] - (self.pose.x, self.pose.y)) @ to_base.T
         velocity = discs[:, 2:4] @ to_base.T
-        return np.column_stack([position, velocity, discs[:, 4]])
+        discs = np.column_stack([position, velocity, discs[:, 4]])
+        in_front = discs[:, 0] > self.front
+        return discs[in_front], discs[~in_front]
 
 
 class ThesisFollower(BehaviourBase):

@@ -12,7 +12,11 @@ Exercises:
   ``receding`` m/s. It is judged by driving: the check runs it inside the follower, in
   two scenes the notebook never shows, and a law that does not keep the distance (a
   fixed command, no feed-forward) or that swings from side to side (figure 50's fixed
-  turn) fails.
+  turn) fails;
+* ``aim_clearance(chair, person, frame_end)``: how close (m) the straight way from the
+  chair's axle to the person passes the end of a door's frame: the distance from the
+  point ``frame_end`` to the *segment* from ``chair`` to ``person`` (all (x, y), m), what
+  a follower that aims at the person must keep above its half width.
 
 Each ``reference_*`` function is an answer the notebook falls back on; a check handed
 the library's own function (or a ``reference_*``) says so instead of passing.
@@ -40,6 +44,8 @@ __all__ = [
     "law_check",
     "optical_check",
     "qr_range_check",
+    "aim_check",
+    "reference_aim_clearance",
     "reference_optical_to_base",
     "true_qr_range",
 ]
@@ -234,3 +240,71 @@ def law_check(law: Callable, seconds: float = 30.0) -> str:
         said.append(f"{name}: {100 * result.held():.0f} % within 1.0 +- 0.3 m, median "
                     f"{median:.2f} m")
     return "; ".join(said)
+
+
+# --- exercise 4: why aiming at her cuts the corner at a door ----------------------------------
+
+
+def reference_aim_clearance(chair, person, frame_end) -> float:
+    """m from ``frame_end`` to the segment ``chair``-``person`` (each (x, y), m): the
+    projection's parameter along the segment clipped to [0, 1], then the distance to
+    that point."""
+    a, b, p = (np.asarray(v, dtype=float).reshape(2) for v in (chair, person, frame_end))
+    way = b - a
+    span = float(way @ way)
+    t = 0.0 if span == 0.0 else min(max(float((p - a) @ way) / span, 0.0), 1.0)
+    return float(np.hypot(*(p - (a + t * way))))
+
+
+def aim_cases() -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """(chair, person, frame end) the check tries: a person in a side door seen from
+    the corridor (the frame beside the way), the frame beyond her and behind the chair
+    (where the nearest point is an end of the segment), and seeded random ones."""
+    rng = np.random.default_rng(1717)
+    cases = [(np.array([3.4, 1.2]), np.array([4.25, 2.3]), np.array([3.8, 2.0])),
+             (np.array([3.4, 1.2]), np.array([4.25, 1.6]), np.array([4.7, 2.0])),
+             (np.array([1.0, 1.0]), np.array([3.0, 1.0]), np.array([0.2, 1.5])),
+             (np.array([0.0, 0.0]), np.array([2.0, 0.0]), np.array([1.0, 0.0]))]
+    for _ in range(6):
+        cases.append(tuple(rng.uniform(-3.0, 3.0, size=2) for _ in range(3)))
+    return cases
+
+
+def _line_distance(chair, person, frame_end) -> float:
+    """The slip: the distance to the whole line through chair and person."""
+    a, b, p = (np.asarray(v, dtype=float) for v in (chair, person, frame_end))
+    way = b - a
+    return float(abs(way[0] * (p - a)[1] - way[1] * (p - a)[0]) / np.hypot(*way))
+
+
+@checker("aiming past a door's frame")
+def aim_check(fn: Callable) -> str:
+    """``fn(chair, person, frame_end)`` against the point-to-segment distance, and the
+    slips: the whole line's distance, the nearer end's, the squared distance."""
+    expect_own(fn, reference_aim_clearance)
+    for chair, person, frame_end in aim_cases():
+        expected = reference_aim_clearance(chair, person, frame_end)
+        answer = fn(chair.copy(), person.copy(), frame_end.copy())
+        try:
+            got = float(answer)
+        except (TypeError, ValueError):
+            raise NotYet(f"aim_clearance gave {format_value(answer)}; return one distance "
+                         "in m") from None
+        if math.isfinite(got) and abs(got - expected) <= 1e-9:
+            continue
+        slips = {
+            "that is the distance to the whole line through the chair and the person; "
+            "the chair drives only the part between them, so a frame beyond either end "
+            "is as far as that end": _line_distance(chair, person, frame_end),
+            "that is the distance to the nearer end (chair or person); the way between "
+            "them can pass nearer": min(np.hypot(*(frame_end - chair)),
+                                        np.hypot(*(frame_end - person))),
+            "that is the squared distance: take its square root":
+                expected ** 2,
+        }
+        expect_no_slip(got, slips, lambda got, wrong: abs(got - wrong) <= 1e-9)
+        raise NotYet(f"the chair at {np.round(chair, 2).tolist()}, the person at "
+                     f"{np.round(person, 2).tolist()} and the frame's end at "
+                     f"{np.round(frame_end, 2).tolist()} gave {got:.3f} m: project the "
+                     "frame's end on the way, keep the projection between its ends")
+    return f"{len(aim_cases())} ways and frame ends: the distance to the segment"

@@ -1,17 +1,27 @@
-"""The follower's trial: a person with a tag walks two minutes round the lab, the chair
-follows.
+"""The follower's trials: a person with a tag walks two minutes round the lab, or 55 s
+through a building, the chair follows.
 
 Ana wears a :class:`~abcwc.perception.tags.FollowCard` on her back and walks a loop of
 the lab at 0.7 m/s, round both tables, with six turns of 90 degrees or more; Ben, who
 wears nothing, hurries (1.2 m/s) back and forth across her way, between her and the
 chair, three times in the two minutes, so the chair loses sight of her and must wait
 for him. The chair starts 1.2 m behind her with the lidar and the colour camera (grey)
-on. The simulator's ground truth only *judges* the follower:
+on. In the building (``data/worlds/building.json``: a corridor 2 m wide that turns north
+at its east end, rooms on both sides behind 0.9 m doors) she walks along the corridor,
+into the north room by one door and out by the other, into the south room and out, and
+round the corner; Carl overtakes the chair from behind at 1.3 m/s, and Dora crosses the
+corridor between the chair and her, through the door she takes (:func:`building_follow_world`;
+nothing in the follower is set for this building). The simulator's ground truth only
+*judges* the follower:
 
 * ``distance``: from the camera to the card on Ana's back (m), every 0.1 s;
 * ``seen``: whether the follower read the tag in that decision;
 * ``collisions``: pymunk contacts of the chair with a wall or a person;
-* ``closest_person``: the smallest gap (m) between the chair's outline and a person.
+* ``closest_person``: the smallest gap (m) between the chair's outline and a person;
+* the longest stop with the way clear (:meth:`FollowResult.longest_needless_stop`).
+
+``abcwc followtrial`` runs both trials on three seeds, with A.13's follower on the same
+walks (:func:`run_trial_in`, :func:`trials_table`).
 """
 
 from __future__ import annotations
@@ -36,6 +46,19 @@ ANA_PATH = [[2.7, 1.4], [5.2, 1.1], [8.7, 1.0], [8.8, 3.6], [5.4, 3.9], [5.3, 6.
 """m: Ana's loop of the lab (the chair starts at the lab's start, (1.5, 1.5))."""
 BEN_PATH = [[4.0, 0.4], [4.6, 3.0]]
 """m: Ben's line across the lab's south side, walked back and forth."""
+BUILDING_ANA_PATH = [[2.2, 1.2], [4.25, 1.2], [4.25, 4.0], [7.75, 4.0], [7.75, 1.2],
+                     [10.95, 1.2], [10.95, -2.5], [14.55, -2.5], [14.55, 1.0], [19.0, 1.0],
+                     [19.0, 8.0]]
+"""m: Ana's way through the building (36.6 m, 52 s at 0.7 m/s): along the corridor,
+into the north room by its west door and out by its east one, into the south room and
+out, and round the corner up the north corridor."""
+CARL_PATH = [[-5.5, 0.45], [18.5, 0.45], [18.5, 9.5]]
+"""m: Carl's way, 1.3 m/s from behind the chair, overtaking it and Ana on their right."""
+DORA_PATH = [[12.75, 4.0], [12.75, 2.4], [10.95, -0.3], [10.95, -2.0]]
+"""m: Dora's way, back and forth at 1.0 m/s from the north room across the corridor into
+the south room by the door Ana takes: she crosses between the chair and Ana."""
+BUILDING_SECONDS = 55.0
+"""s: the building trial's length (Ana reaches the end of her way at 52 s)."""
 
 
 def follow_world(passer_by: bool = True) -> World:
@@ -47,6 +70,19 @@ def follow_world(passer_by: bool = True) -> World:
     if passer_by:
         raw["people"].append({"name": "ben", "speed": 1.2, "loop": False, "path": BEN_PATH})
     raw["description"] = "The lab, with Ana (who wears a tag) and Ben walking."
+    return world_from_dict(raw)
+
+
+def building_follow_world(walkers: bool = True) -> World:
+    """The building (``data/worlds/building.json``) with Ana (the same tag) and, with
+    ``walkers``, Carl (from behind) and Dora (across)."""
+    raw = json.loads((data_dir() / "worlds" / "building.json").read_text())
+    raw["people"] = [{"name": "ana", "speed": 0.7, "loop": False, "path": BUILDING_ANA_PATH,
+                      "tag": {"text": "ana", "marker_id": 7, "side": 0.2}}]
+    if walkers:
+        raw["people"] += [{"name": "carl", "speed": 1.3, "loop": False, "path": CARL_PATH},
+                          {"name": "dora", "speed": 1.0, "loop": False, "path": DORA_PATH}]
+    raw["description"] = "The building, with Ana (who wears a tag), Carl and Dora walking."
     return world_from_dict(raw)
 
 
@@ -78,6 +114,34 @@ class FollowResult:
         stamps = np.concatenate([[self.t[0]], self.t[self.seen], [self.t[-1]]])
         return float(np.diff(stamps).max())
 
+    def longest_needless_stop(self, clear: float = 1.5, behind: float = 1.3) -> float:
+        """s: the longest stretch in which the chair stood (under 0.05 m/s and
+        0.05 rad/s sent) though Ana was more than ``behind`` m ahead (distance to her
+        card) and no other person was within ``clear`` m of the chair: a stop with the
+        way along her trail clear (she walked it), judged by the simulator's truth."""
+        if not len(self.t):
+            return 0.0
+        others = self.people[:, 1:] if self.people.ndim == 3 else np.zeros((len(self.t), 0, 2))
+        near = (np.hypot(*(others - self.track[:, None, :2]).transpose(2, 0, 1)) < clear
+                ).any(axis=1) if others.shape[1] else np.zeros(len(self.t), bool)
+        still = (np.abs(self.v) < 0.05) & (np.abs(self.w) < 0.05)
+        needless = still & (self.distance > behind) & ~near
+        longest = run = 0
+        for flag in needless:
+            run = run + 1 if flag else 0
+            longest = max(longest, run)
+        return 0.1 * longest
+
+    def figures(self) -> dict[str, float | int | str]:
+        """The run's figures (the issue's bars): share held (%), tag read (%),
+        collisions, closest to a person (m), final distance (m), longest needless stop
+        (s), status."""
+        return {"held_percent": 100 * self.held(), "tag_read_percent": 100 * self.seen.mean(),
+                "collisions": self.collisions, "closest_person": self.closest_person,
+                "final_distance": float(self.distance[-1]),
+                "longest_needless_stop": self.longest_needless_stop(),
+                "status": self.status + (f" ({self.failure})" if self.failure else "")}
+
     def summary(self) -> str:
         return "\n".join([
             f"{self.t[-1] - self.t[0] + 0.1:.0f} s; tag read in {100 * self.seen.mean():.0f} % "
@@ -85,6 +149,8 @@ class FollowResult:
             f"distance to the tag: median {np.median(self.distance):.2f} m, "
             f"{100 * self.held():.1f} % of the readings within 1.0 +- 0.3 m",
             f"collisions: {self.collisions}; closest to a person: {self.closest_person:.2f} m",
+            f"at the end {self.distance[-1]:.2f} m from her card; longest stop with the "
+            f"way clear {self.longest_needless_stop():.1f} s",
             f"status: {self.status}" + (f" ({self.failure})" if self.failure else ""),
         ])
 
@@ -134,4 +200,35 @@ def run_follow_trial(seconds: float = 120.0, seed: int = 0, thesis: bool = False
                         np.array(people))
 
 
-__all__ = ["ANA_PATH", "BEN_PATH", "FollowResult", "follow_world", "run_follow_trial"]
+TRIAL_WORLDS = ("lab", "building")
+"""The follow trials' worlds: :func:`follow_world` and :func:`building_follow_world`."""
+
+
+def run_trial_in(where: str, seed: int = 0, thesis: bool = False) -> FollowResult:
+    """The follow trial ``where`` (one of :data:`TRIAL_WORLDS`): two minutes in the lab,
+    or ``BUILDING_SECONDS`` in the building, for one ``seed``."""
+    if where == "lab":
+        return run_follow_trial(seconds=120.0, seed=seed, thesis=thesis)
+    if where == "building":
+        return run_follow_trial(seconds=BUILDING_SECONDS, seed=seed, thesis=thesis,
+                                world=building_follow_world())
+    raise ValueError(f"unknown follow trial {where!r}; allowed: {', '.join(TRIAL_WORLDS)}")
+
+
+def trials_table(results: dict[tuple[str, str, int], FollowResult]) -> str:
+    """One line per run, keyed (world, follower, seed): the figures of
+    :meth:`FollowResult.figures`."""
+    lines = [f"{'world':9s}{'follower':10s}{'seed':>5s}{'held %':>8s}{'tag %':>7s}"
+             f"{'contacts':>9s}{'closest m':>10s}{'end m':>7s}{'stop s':>7s}  status"]
+    for (where, who, seed), result in results.items():
+        f = result.figures()
+        lines.append(f"{where:9s}{who:10s}{seed:5d}{f['held_percent']:8.1f}"
+                     f"{f['tag_read_percent']:7.1f}{f['collisions']:9d}"
+                     f"{f['closest_person']:10.2f}{f['final_distance']:7.2f}"
+                     f"{f['longest_needless_stop']:7.1f}  {f['status']}")
+    return "\n".join(lines)
+
+
+__all__ = ["ANA_PATH", "BEN_PATH", "BUILDING_ANA_PATH", "BUILDING_SECONDS", "CARL_PATH",
+           "DORA_PATH", "TRIAL_WORLDS", "FollowResult", "building_follow_world",
+           "follow_world", "run_follow_trial", "run_trial_in", "trials_table"]

@@ -25,11 +25,7 @@ avoids where a person *is* steps into where they *will be*. Each scan:
    has been seen ``confirm`` times.
 
 :meth:`PeopleTracker.moving_discs` gives the tracks as ``(x, y, vx, vy, radius)`` rows,
-what the DWA planner needs to keep its trajectories out of people's way, less the
-**fixtures**: tracks never seen walking that stand within ``fixture_distance`` m of a
-mapped wall, where a map made from the chair's own scans leaves a door frame's end out
-(scans graze it). Kept as people, the chair would keep out of a door frame's way for
-ever. :meth:`PeopleTracker.walkers` gives only the tracks once seen walking.
+what the DWA planner needs to keep its trajectories out of people's way.
 """
 
 from __future__ import annotations
@@ -74,8 +70,7 @@ class PeopleTracker:
                  unexplained: float = 0.2,
                  cluster_gap: float = 0.3, min_points: int = 3, max_extent: float = 1.0,
                  person_radius: float = 0.25, gate: float = 0.6, alpha: float = 0.5,
-                 beta: float = 0.2, max_age: float = 1.0, confirm: int = 3,
-                 fixture_distance: float = 0.4):
+                 beta: float = 0.2, max_age: float = 1.0, confirm: int = 3):
         self.grid = grid
         self.wall_distance: np.ndarray | None = None
         if walls is not None and grid is not None:
@@ -91,7 +86,6 @@ class PeopleTracker:
         self.person_radius, self.gate = float(person_radius), float(gate)
         self.alpha, self.beta = float(alpha), float(beta)
         self.max_age, self.confirm = float(max_age), int(confirm)
-        self.fixture_distance = float(fixture_distance)
         self.tracks: list[PersonTrack] = []
         self._next_id = 0
         self._t: float | None = None
@@ -168,24 +162,10 @@ class PeopleTracker:
 
     def moving_discs(self) -> np.ndarray:
         """(M, 5): each live track's ``x, y, vx, vy, radius`` (m, m/s); the velocity is
-        zero until the track is confirmed. Fixtures (:meth:`is_fixture`) are left out."""
+        zero until the track is confirmed."""
         rows = [(*tr.position, *(tr.velocity if tr.hits >= self.confirm else (0.0, 0.0)),
-                 self.person_radius) for tr in self.tracks if not self.is_fixture(tr)]
+                 self.person_radius) for tr in self.tracks]
         return np.array(rows, dtype=float).reshape(-1, 5)
-
-    def is_fixture(self, track: PersonTrack) -> bool:
-        """Whether ``track`` is more likely a piece of wall the map drew short than a
-        person: it has never been seen walking, and its centre lies within
-        ``fixture_distance`` m of a mapped wall (a door frame's end that a map made
-        from the chair's own scans left out stands just there, for ever; a person who
-        stands against a wall is still an obstacle in the costmap, only not one the
-        chair expects to move)."""
-        if track.walked or self.wall_distance is None or self.grid is None:
-            return False
-        rows, cols = self.grid.world_to_cell(track.position[None])
-        if not self.grid.contains(rows, cols)[0]:
-            return False
-        return bool(self.wall_distance[rows[0], cols[0]] <= self.fixture_distance)
 
 
 def standing_still(discs: np.ndarray) -> np.ndarray:

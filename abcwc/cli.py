@@ -242,8 +242,7 @@ def _slam(args: argparse.Namespace) -> int:
 
 NAVTRIAL_GOAL_FIGURES = ("status", "reason", "reached", "seconds", "driven", "straight",
                          "planned", "final_error", "final_heading_error", "collisions",
-                         "lethal_periods", "closest_person", "max_localisation_error", "phases",
-                         "recoveries")
+                         "lethal_periods", "closest_person", "max_localisation_error", "phases")
 """Each goal's figures in ``navtrial --json`` (m, s, rad; GoalOutcome's names)."""
 
 
@@ -392,7 +391,7 @@ def build_parser() -> argparse.ArgumentParser:
                            "cafeteria)")
     demo.add_argument("--seed", type=int, default=0)
     demo.add_argument("--typed", action="store_true",
-                      help="type the command instead of speaking it (espeak-ng and the "
+                      help="type the command instead of speaking it (flite and the "
                            "recogniser)")
     demo.add_argument("--seconds", type=float, default=None,
                       help="the wander's simulated seconds (default 300)")

@@ -1,5 +1,5 @@
 """The capstone end to end, as a new user runs it: ``abcwc demo`` maps the floor it does
-not know by a tour of its places, is told (spoken when espeak-ng is there) to go to the
+not know by a tour of its places, is told (spoken when flite is there) to go to the
 cafeteria, drives there among the walking people, asks for the lift on the way and writes
 its report; on a world file written here, with places no world of the project has, it
 does the same. Judged by the simulator's truth (the report's figures are its)."""
@@ -21,7 +21,7 @@ from abcwc.experiments.errand import tour_of
 from abcwc.log import RunLog
 from abcwc.mapping.grid import OccupancyGrid
 from abcwc.mapping.map_io import load_map
-from abcwc.perception.speech.synthesis import espeak_available
+from abcwc.perception.speech.synthesis import engine_available
 from abcwc.sim.world import load_world, world_from_dict
 from abcwc.types import Pose2D
 from abcwc.viz.mission import plot_timeline
@@ -51,7 +51,7 @@ def test_the_demo_maps_the_floor_and_the_chair_gets_its_coffee(floor_demo):
     assert figures["arrived"] and figures["state"] == "arrived"
     assert figures["destination"] == "cafeteria" and figures["world"] == "floor"
     assert figures["heard"] == "go to the cafeteria"
-    assert figures["heard_by"] == ("spoken" if espeak_available() else "typed")
+    assert figures["heard_by"] == ("spoken" if engine_available("flite") else "typed")
     assert figures["collisions"] == 0 and figures["mapping_collisions"] == 0
     assert figures["final_error_m"] <= 0.25  # the navigator's tolerance, by the truth
     assert figures["max_localisation_error_m"] < 0.1

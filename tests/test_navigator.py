@@ -363,32 +363,3 @@ def test_on_a_finished_map_no_plan_crosses_unknown_cells():
     still_mapping = Navigator(growing, MapLocalizer(occupied_points(cells, grid), start))
     still_mapping.go_to(goal)
     assert still_mapping.running and still_mapping.path is not None
-
-
-def test_only_a_track_seen_walking_is_a_walker():
-    """A post the map lacks is tracked as a person standing still; the navigator waits
-    for people in its way (a way they shut is no proof it is too narrow) but not for a
-    post, so PeopleTracker.walkers keeps only the tracks once faster than a walk."""
-    room = [[[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]]]
-    post = [[[5.0, 7.0], [5.2, 7.0], [5.2, 7.2], [5.0, 7.2], [5.0, 7.0]]]
-    walker = {"name": "w", "path": [[3.0, 1.0], [3.0, 9.0]], "speed": 0.8, "radius": 0.25,
-              "loop": False}
-    places = {"start": [7.0, 5.0, math.pi]}
-    world = world_from_dict({"name": "room", "walls": room + post, "places": places,
-                             "people": [walker]})
-    static = Navigator.for_world(world_from_dict({"name": "map", "walls": room,
-                                                  "places": places})).static_map
-    tracker = PeopleTracker(static.cost == 254, static)
-    chair = SimBase(world, seed=8, lidar=True)
-    sensor = Pose2D(7.0 - chair.params.lidar.mount[0], 5.0, math.pi)
-    last = -1.0
-    for _ in range(150):
-        frame = chair.step()
-        if frame.lidar.stamp > last:
-            last = frame.lidar.stamp
-            tracker.update(frame.lidar, sensor, frame.lidar.stamp)
-    positions = np.array([track.position for track in tracker.tracks])
-    assert len(positions) == 2 and np.hypot(*(positions - (5.1, 7.1)).T).min() < 0.3
-    walkers = tracker.walkers()
-    x, y, _ = chair.walkers[0].circle
-    assert walkers.shape == (1, 3) and np.hypot(walkers[0, 0] - x, walkers[0, 1] - y) < 0.1

@@ -36,9 +36,8 @@ def test_slam_maps_the_simulated_floor_and_loops_make_it_better():
     assert precision >= 0.9 and recall >= 0.9
     assert with_loops.loops > 50 and without.loops == 0
     # the drive is the navigator's, so it changes with the navigator: on it, loop
-    # closure has taken the worst keyframe from 0.028 to 0.019 m, from 0.032 to 0.028 m,
-    # and from 0.046 to 0.030 m; the lidar's matches leave the loops little to take out
-    # on 200 s
+    # closure has taken the worst keyframe from 0.028 to 0.019 m, and from 0.032 to
+    # 0.028 m; the lidar's matches leave the loops little to take out on 200 s
     assert worst < worst_alone
     # the wheel odometry alone does not make a map
     assert _scores(world, laser, laser.odometry)[0] < 0.5

@@ -8,7 +8,7 @@ moves. An errand here is that, in the simulator:
 1. **Map.** The chair maps the floor it does not know from its own lidar scans
    (:mod:`abcwc.behaviours.explore`, then graph SLAM) and saves the map as map_server
    files; or a saved map of a known floor is loaded.
-2. **Be told.** "go to the <place>" is spoken (espeak-ng synthesises it, the command
+2. **Be told.** "go to the <place>" is spoken (flite synthesises it, the command
    recogniser hears it), or typed when no synthesiser is installed: the same grammar.
 3. **Go.** The :class:`~abcwc.behaviours.mission.Mission` drives there by the chair's
    own map and estimate, among the world's walking people, with the body's safety filter
@@ -38,12 +38,17 @@ from abcwc.geometry import transform_points
 from abcwc.log import RunLog
 from abcwc.mapping.grid import OccupancyGrid
 from abcwc.navigation.costmap import chair_footprint
+from abcwc.perception.speech.synthesis import Voice
 from abcwc.sim import SimBase
 from abcwc.sim.people import circles_of
 from abcwc.sim.world import World
 from abcwc.types import Pose2D, SensorFrame
 
 ENDED = (MissionState.ARRIVED, MissionState.FAILED)
+ERRAND_VOICE = Voice("slt", engine="flite")
+"""The voice an errand's command is spoken in: flite's slt, near a person's (espeak-ng's
+formant voices are the recogniser's stress test, and its thresholds refuse most of
+them, as chapter 04 shows)."""
 
 
 @dataclass
@@ -144,21 +149,21 @@ class ErrandJudge:
 
 
 def spoken_command(text: str, places: dict[str, Pose2D]) -> tuple[object, str]:
-    """``text`` synthesised by espeak-ng and heard by the command recogniser: the
-    recogniser's command and "spoken"; when no synthesiser is installed, a place's name is
-    not in the recogniser's pronunciation dictionary, or the recogniser refuses what it
-    heard, the typed path: ``text`` itself and "typed"."""
+    """``text`` synthesised in :data:`ERRAND_VOICE` and heard by the command recogniser:
+    the recogniser's command and "spoken"; when that voice's synthesiser is not
+    installed, a place's name is not in the recogniser's pronunciation dictionary, or the
+    recogniser refuses what it heard, the typed path: ``text`` itself and "typed"."""
     from abcwc.perception.speech.commands import CommandSet
     from abcwc.perception.speech.recognizer import CommandRecognizer
-    from abcwc.perception.speech.synthesis import espeak_available, speak
+    from abcwc.perception.speech.synthesis import engine_available, speak
 
-    if not espeak_available():
+    if not engine_available(ERRAND_VOICE.engine):
         return text, "typed"
     try:
         recogniser = CommandRecognizer(CommandSet(places))
     except ValueError:  # a place's name the recogniser has no pronunciation for
         return text, "typed"
-    heard = recogniser.recognise(speak(text))
+    heard = recogniser.recognise(speak(text, ERRAND_VOICE))
     if heard.command is None:
         return text, "typed"
     return heard.command, "spoken"
@@ -345,6 +350,6 @@ def errands_table(results: list[ErrandResult]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["ENDED", "ErrandJudge", "ErrandResult", "capstone_errand", "errand_destination",
-           "errands_table", "mission_on_its_own_map", "run_errand", "run_errands",
-           "spoken_command", "tour_of"]
+__all__ = ["ENDED", "ERRAND_VOICE", "ErrandJudge", "ErrandResult", "capstone_errand",
+           "errand_destination", "errands_table", "mission_on_its_own_map", "run_errand",
+           "run_errands", "spoken_command", "tour_of"]

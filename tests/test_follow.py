@@ -134,7 +134,7 @@ def test_the_trail_takes_the_chair_through_a_side_door_not_across_its_frame():
     """Ana turns 90 degrees into a 0.9 m door; the chair goes where she went: through
     the door's middle, touching nothing (aiming at her would cross the frame)."""
     ana = {**ANA, "path": [[2.2, 1.0], [7.0, 1.0], [7.0, 4.5]]}
-    chair, follower, poses = follow_in(corridor_world([ana]), 20.0)
+    chair, follower, poses = follow_in(corridor_world([ana]), 30.0)
     assert chair.collisions == 0
     assert poses[-1, 1] > 2.4  # in the room
     in_door = poses[np.abs(poses[:, 1] - 2.0) < 0.05]

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.sparse import coo_matrix, lil_matrix
+from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra, shortest_path
 
 from abcwc.navigation.costmap import FREE_SPACE, INSCRIBED, LETHAL, NO_INFORMATION, Costmap
@@ -30,31 +30,46 @@ def random_costmap(seed, size=24):
     return costmap
 
 
-def reference_cost(costmap, start, goal):
-    """The least path cost by scipy's Floyd-Warshall-free shortest_path on a graph built
-    here cell by cell, with the module's weights written out again."""
-    h, w = costmap.shape
-    graph = lil_matrix((h * w, h * w))
+NAVFN_UNKNOWN_WEIGHT = 253.0  # navfn.cpp's setCostmap: an unknown cell is COST_OBS - 1
 
-    def weight(r, c):
-        value = int(costmap.cost[r, c])
-        if value == NO_INFORMATION:
-            value = INSCRIBED - 1
-        elif value >= INSCRIBED:
-            return math.inf
-        return COST_NEUTRAL + COST_FACTOR * value
 
-    for r in range(h):
-        for c in range(w):
+def reference_weight(value):
+    """navfn's weight of a cell of costmap ``value``, written out again: 50 + 0.8 cost
+    below ``INSCRIBED``, 253 for an unknown cell, impassable from ``INSCRIBED`` up."""
+    if value == NO_INFORMATION:
+        return NAVFN_UNKNOWN_WEIGHT
+    if value >= INSCRIBED:
+        return math.inf
+    return COST_NEUTRAL + COST_FACTOR * value
+
+
+def neighbour_graph(weights):
+    """A (cells, cells) CSR matrix of every 8-connected move between passable cells of
+    the (height, width) ``weights``: its length in cells times the mean of the two
+    weights, built here cell by cell."""
+    height, width = weights.shape
+    rows, cols, costs = [], [], []
+    for r in range(height):
+        for c in range(width):
             for dr in (-1, 0, 1):
                 for dc in (-1, 0, 1):
                     rr, cc = r + dr, c + dc
-                    if (dr or dc) and 0 <= rr < h and 0 <= cc < w:
-                        step = math.hypot(dr, dc) * (weight(r, c) + weight(rr, cc)) / 2
+                    if (dr or dc) and 0 <= rr < height and 0 <= cc < width:
+                        step = math.hypot(dr, dc) * (weights[r, c] + weights[rr, cc]) / 2
                         if math.isfinite(step):
-                            graph[r * w + c, rr * w + cc] = step
-    distances = shortest_path(graph.tocsr(), method="J", indices=start[0] * w + start[1])
-    return distances[goal[0] * w + goal[1]]
+                            rows.append(r * width + c)
+                            cols.append(rr * width + cc)
+                            costs.append(step)
+    return coo_matrix((costs, (rows, cols)), shape=(height * width,) * 2).tocsr()
+
+
+def reference_cost(costmap, start, goal):
+    """The least path cost by scipy's shortest_path on a graph built here cell by cell,
+    with navfn's weights written out again."""
+    weights = np.vectorize(reference_weight, otypes=[float])(costmap.cost.astype(int))
+    distances = shortest_path(neighbour_graph(weights), method="J",
+                              indices=start[0] * costmap.width + start[1])
+    return distances[goal[0] * costmap.width + goal[1]]
 
 
 def path_cost(costmap, cells):
@@ -62,8 +77,7 @@ def path_cost(costmap, cells):
     cost = 0.0
     for (r0, c0), (r1, c1) in zip(cells[:-1], cells[1:]):
         assert max(abs(r1 - r0), abs(c1 - c0)) == 1  # 8-connected moves only
-        w0, w1 = (COST_NEUTRAL + COST_FACTOR * min(int(costmap.cost[r, c]), INSCRIBED - 1)
-                  for r, c in ((r0, c0), (r1, c1)))
+        w0, w1 = (reference_weight(int(costmap.cost[r, c])) for r, c in ((r0, c0), (r1, c1)))
         cost += math.hypot(r1 - r0, c1 - c0) * (w0 + w1) / 2
     return cost
 
@@ -141,20 +155,7 @@ def test_dijkstra_costs_are_the_least_costs_scipys_dijkstra_finds():
     weights = rng.uniform(50.0, 250.0, (12, 15))
     weights[rng.random(weights.shape) < 0.15] = np.inf
     weights[0, 0] = 50.0
-    height, width = weights.shape
-    rows, cols, costs = [], [], []
-    for r in range(height):
-        for c in range(width):
-            for dr in (-1, 0, 1):
-                for dc in (-1, 0, 1):
-                    rr, cc = r + dr, c + dc
-                    if (dr or dc) and 0 <= rr < height and 0 <= cc < width:
-                        step = math.hypot(dr, dc) * (weights[r, c] + weights[rr, cc]) / 2
-                        if math.isfinite(step):
-                            rows.append(r * width + c)
-                            cols.append(rr * width + cc)
-                            costs.append(step)
-    graph = coo_matrix((costs, (rows, cols)), shape=(height * width,) * 2).tocsr()
+    graph = neighbour_graph(weights)
     expected = dijkstra(graph, indices=0)
     assert np.allclose(dijkstra_costs(weights, 0).ravel(), expected)
 

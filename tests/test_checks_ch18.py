@@ -13,6 +13,7 @@ import pytest
 from abcwc.behaviours import MissionState, Situation, Status, next_state
 from abcwc.behaviours import mission as mission_module
 from abcwc.checks import ch18
+from abcwc.checks.report import NotYet, expect_own
 from abcwc.experiments.selection import scanning_trials
 from tests.check_helpers import assert_not_yet, assert_pass, not_written
 
@@ -130,8 +131,9 @@ def test_a_helper_that_calls_abcwcs_rule_is_found():
     def mine(state, situation):
         return helper(state, situation)
 
-    assert ch18._calls(mine, next_state)  # noqa: SLF001
-    assert not ch18._calls(student_rule, next_state)  # noqa: SLF001
+    with pytest.raises(NotYet, match="abcwc's own next_state"):
+        expect_own(mine, next_state)
+    expect_own(student_rule, next_state)  # the student's own rule is theirs
 
 
 # --- exercise 2 -----------------------------------------------------------------------

@@ -21,10 +21,8 @@ passing.
 
 from __future__ import annotations
 
-import functools
 import math
 import traceback
-import types
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -70,60 +68,6 @@ FALSE_SELECTIONS = 0.05
 
 
 # --- the student's rule, guarded ------------------------------------------------------------
-
-
-def _calls(fn: object, target: Callable, depth: int = 0, seen: set | None = None) -> bool:
-    """Whether ``fn`` is ``target``, wraps it (``functools.partial``, ``__wrapped__``, a
-    closure) or names it among the globals it reads (through modules, and through the
-    functions it calls, a few levels down)."""
-    seen = set() if seen is None else seen
-    if fn is target:
-        return True
-    if depth > 4 or id(fn) in seen or isinstance(fn, type):
-        return False
-    seen.add(id(fn))
-    inner = [getattr(fn, "func", None), getattr(fn, "__wrapped__", None),
-             getattr(fn, "__func__", None)]
-    if isinstance(fn, functools.partial):
-        inner += list(fn.args) + list(fn.keywords.values())
-    code = getattr(fn, "__code__", None)
-    if code is not None:
-        inner += _closed_over(fn)
-        names = set(code.co_names)
-        for const in code.co_consts:  # names read by nested functions and lambdas
-            if isinstance(const, types.CodeType):
-                names |= set(const.co_names)
-        space = getattr(fn, "__globals__", {})
-        for name in names:
-            value = space.get(name)
-            if isinstance(value, types.ModuleType):
-                if any(getattr(value, n, None) is target for n in names):
-                    return True
-                inner += [getattr(value, n, None) for n in names]
-            else:
-                inner.append(value)
-    return any(callable(each) and _calls(each, target, depth + 1, seen) for each in inner
-               if each is not None)
-
-
-def _closed_over(fn: object) -> list:
-    """The values in a function's closure (an empty cell left out)."""
-    values = []
-    for cell in getattr(fn, "__closure__", None) or ():
-        try:
-            values.append(cell.cell_contents)
-        except ValueError:  # a cell not filled yet
-            continue
-    return values
-
-
-def _expect_yours(fn: Callable, *answers: Callable) -> None:
-    """Refuse ``fn`` if it is, wraps or calls one of abcwc's ``answers``."""
-    expect_own(fn, *answers)
-    for answer in answers:
-        if _calls(fn, answer):
-            raise NotYet(f"that is abcwc's own {answer.__name__} (yours calls it): write "
-                         "yours")
 
 
 def _guarded(rule: Callable) -> Callable:
@@ -325,7 +269,7 @@ def _blocked(rule: Callable, worlds: dict[str, World]) -> None:
 def rule_check(rule: Callable) -> str:
     """``rule(state, situation)`` drives a :class:`Mission` through the joystick, a lost
     chair and a blocked corridor on :func:`rule_worlds` (module notes)."""
-    _expect_yours(rule, next_state)
+    expect_own(rule, next_state)
     guarded = _guarded(rule)
     worlds = rule_worlds()
     _override(guarded, worlds["day room"])
@@ -382,7 +326,7 @@ def run_lift_route(seed: int = 18, seconds: float = 150.0) -> tuple[RunLog, Miss
 def lift_requests_check(predicted: Callable[[], int], log, lift: Pose2D) -> str:
     """The count written before the run against the run's log (its ``mission_event``
     channel), itself checked against the chair's true track."""
-    _expect_yours(predicted, run_lift_route, _requests_along)
+    expect_own(predicted, run_lift_route, _requests_along)
     value = predicted()
     expect(isinstance(value, (int, np.integer)) and not isinstance(value, bool)
            and value >= 0, f"predicted_lift_requests() gave {format_value(value)}; write "
@@ -430,7 +374,7 @@ def true_scan_choice(options: int = 9) -> tuple[float, float]:
 @checker("measurement")
 def scan_choice_check(choice: Callable[[], tuple[float, float]]) -> str:
     """``(interval, mean time)`` read off the sweep against the model's closed form."""
-    _expect_yours(choice, true_scan_choice, scan_false_rate)
+    expect_own(choice, true_scan_choice, scan_false_rate)
     interval, seconds = numbers(choice(), 2, "scan_choice()",
                                 "return two numbers: the interval (s) and the mean time "
                                 "to select there (s)")

@@ -141,7 +141,8 @@ class Detection:
     ``margins`` beside the distinctive region (0 blank; nan without margins), the
     distinctive region's ``correlation`` (nan without one), whether it was ``verified``,
     and the ``bearing`` (rad, left positive) of the outline's centre, where its
-    diagonals cross."""
+    diagonals cross. ``residual`` is the distinctive region's largest local
+    disagreement with the reference (:func:`stroke_residual`; nan without one)."""
 
     name: str
     outline: np.ndarray
@@ -153,6 +154,7 @@ class Detection:
     bearing: float
     plate: float = math.nan
     margins: float = math.nan
+    residual: float = math.nan
 
 
 def make_features(kind: str = "sift", count: int = 0):
@@ -218,6 +220,23 @@ def region_correlation(view: np.ndarray, homography: np.ndarray, reference: np.n
     reference is first shrunk to the size the region has in the view and enlarged
     again, so that both are equally sharp."""
     x0, y0, x1, y1 = box
+    warped, patch, _ = _region_seen(view, homography, reference, box)
+    across = np.linspace(0, x1 - x0, int(strips) + 1).round().astype(int)
+    down = np.linspace(0, y1 - y0, int(rows) + 1).round().astype(int)
+    cells = [(slice(c, d), slice(a, b)) for a, b in zip(across[:-1], across[1:])
+             for c, d in zip(down[:-1], down[1:])]
+    # a cell blank on the reference says nothing here (the margins' check reads blanks)
+    written = [cell for cell in cells if patch[cell].std() > 0.1 * patch.std()] or cells
+    return min(_ncc(warped[cell], patch[cell]) for cell in written)
+
+
+def _region_seen(view: np.ndarray, homography: np.ndarray, reference: np.ndarray,
+                 box: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray, float]:
+    """The region ``box`` of ``view`` warped back into the reference's frame through
+    ``homography`` (reference to view), the reference's same region shrunk to the size
+    it has in the view and enlarged again (as sharp as the view's), both float, and
+    that size (view px per reference px, at most 1)."""
+    x0, y0, x1, y1 = box
     height, width = reference.shape[:2]
     back = cv2.warpPerspective(view, homography, (width, height),
                                flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
@@ -230,15 +249,32 @@ def region_correlation(view: np.ndarray, homography: np.ndarray, reference: np.n
     if scale < 1.0:
         small = cv2.resize(patch, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
         patch = cv2.resize(small, (x1 - x0, y1 - y0), interpolation=cv2.INTER_LINEAR)
-    warped = back[y0:y1, x0:x1].astype(np.float64)
-    patch = patch.astype(np.float64)
-    across = np.linspace(0, x1 - x0, int(strips) + 1).round().astype(int)
-    down = np.linspace(0, y1 - y0, int(rows) + 1).round().astype(int)
-    cells = [(slice(c, d), slice(a, b)) for a, b in zip(across[:-1], across[1:])
-             for c, d in zip(down[:-1], down[1:])]
-    # a cell blank on the reference says nothing here (the margins' check reads blanks)
-    written = [cell for cell in cells if patch[cell].std() > 0.1 * patch.std()] or cells
-    return min(_ncc(warped[cell], patch[cell]) for cell in written)
+    return back[y0:y1, x0:x1].astype(np.float64), patch.astype(np.float64), float(scale)
+
+
+def stroke_residual(view: np.ndarray, homography: np.ndarray, reference: np.ndarray,
+                    box: tuple[int, int, int, int], smooth_px: float = 1.0) -> float:
+    """The largest local disagreement between the reference's region ``box`` and the
+    same region of ``view`` warped back through ``homography`` (reference to view), in
+    shares of the region's ink contrast: the view is first brought to the reference's
+    contrast (the gain and offset that fit it best, least squares: exposure and lighting
+    cancel), the reference made as sharp as the view (:func:`_region_seen`), and their
+    difference smoothed over ``smooth_px`` of the view's px (a Gaussian's sigma) before
+    its largest magnitude is taken. A stroke missing or added (Z's diagonal for E's
+    upright and middle bar) leaves a blob of one sign about a stroke wide: about 0.7 of
+    the contrast or more; a fit a pixel off leaves a stroke's two edges of opposite
+    signs, which the smoothing cancels, and noise averages out; real views stay under
+    about 0.5 (module notes). Returns inf where the view's region does not brighten
+    with the reference's ink (gain <= 0)."""
+    warped, patch, scale = _region_seen(view, homography, reference, box)
+    contrast = float(np.percentile(patch, 99) - np.percentile(patch, 1))
+    design = np.column_stack([patch.ravel(), np.ones(patch.size)])
+    (gain, offset), *_ = np.linalg.lstsq(design, warped.ravel(), rcond=None)
+    if not gain * contrast > 0:
+        return math.inf
+    difference = (warped - (gain * patch + offset)) / (gain * contrast)
+    return float(np.abs(cv2.GaussianBlur(difference, (0, 0), smooth_px / scale,
+                                         borderType=cv2.BORDER_CONSTANT)).max())
 
 
 def _ncc(a: np.ndarray, b: np.ndarray) -> float:
@@ -349,7 +385,9 @@ class ObjectDetector:
     needs. A verified detection needs the plate fitted again to correlate at least
     ``min_plate``, at most ``max_margin_ink`` ink in the blank margins beside the
     distinctive region, and the distinctive region to correlate at least
-    ``min_correlation``, the smallest over ``strips`` vertical strips of it (set
+    ``min_correlation``, the smallest over ``strips`` x ``rows`` cells of it, and to
+    disagree with the reference nowhere by more than ``max_residual`` of its ink
+    contrast (:func:`stroke_residual`: a letter's stroke missing or added; set
     ``verify`` False to see what steps 1-4 alone report; the checks are still made and
     reported). ``seed`` seeds OpenCV's random generator before each FLANN index is
     built, so that the same view gives the same answer whatever was built before."""
@@ -360,7 +398,8 @@ class ObjectDetector:
                  verify: bool = True,
                  reference_widths: tuple[int, ...] | None = None,
                  reference_blur: float = 1.0, min_plate: float = 0.6,
-                 max_margin_ink: float = 0.35, seed: int = 0):
+                 max_margin_ink: float = 0.35, max_residual: float = 0.65,
+                 seed: int = 0):
         if not objects:
             raise ValueError("give at least one KnownObject to look for")
         if not 0 < ratio <= 1:
@@ -374,13 +413,16 @@ class ObjectDetector:
         for name, value in (("min_correlation", min_correlation), ("min_plate", min_plate)):
             if not -1 <= value <= 1:
                 raise ValueError(f"{name} is a correlation, in [-1, 1]; got {value!r}")
-        if not max_margin_ink >= 0:
-            raise ValueError(f"max_margin_ink must be >= 0, got {max_margin_ink!r}")
+        for name, value in (("max_margin_ink", max_margin_ink),
+                            ("max_residual", max_residual)):
+            if not value >= 0:
+                raise ValueError(f"{name} must be >= 0, got {value!r}")
         self.features = features
         self.ratio, self.ransac_px, self.min_inliers = ratio, ransac_px, int(min_inliers)
         self.min_correlation, self.verify, self.strips = min_correlation, verify, int(strips)
         self.rows = int(rows)
         self.min_plate, self.max_margin_ink = min_plate, max_margin_ink
+        self.max_residual = max_residual
         self._detector = make_features(features)
         widths = reference_widths or REFERENCE_WIDTHS[features]
         self._references = [
@@ -467,7 +509,7 @@ class ObjectDetector:
         if plate is not None and plausible_outline(_outline(ref.obj, plate[1]), view.shape):
             plate_score, homography = plate
         verified = plate_score >= self.min_plate
-        correlation = margins = math.nan
+        correlation = margins = residual = math.nan
         if ref.obj.distinctive is not None:
             box = ref.obj.distinctive
             x0, y0, x1, y1 = box
@@ -481,15 +523,18 @@ class ObjectDetector:
                 across = np.hypot(*(region[1] - region[0]))
                 margins = margin_ink(view, homography, reference, box,
                                      max(3, math.ceil(2 * (x1 - x0) / max(across, 1e-9))))
+                residual = stroke_residual(view, homography, reference, box)
             # a region cut by the image's edge cannot be read: not verified
             verified = (verified and correlation >= self.min_correlation
-                        and not margins > self.max_margin_ink)
+                        and not margins > self.max_margin_ink
+                        and residual <= self.max_residual)
         outline = _outline(ref.obj, homography)
         centre = _diagonal_crossing(outline)
         bearing = (-math.atan((centre[0] - cx) / fx) if fx is not None and cx is not None
                    else math.nan)
         return Detection(ref.obj.name, outline, homography, len(good), int(mask.sum()),
-                         correlation, bool(verified), bearing, plate_score, margins)
+                         correlation, bool(verified), bearing, plate_score, margins,
+                         residual)
 
 
 def _plate_mask(obj: KnownObject) -> np.ndarray:

@@ -267,7 +267,8 @@ def bench_vision() -> dict[str, float]:
         for condition, found in measured.found.items():
             figures[f"{name} found, {condition} (%)"] = 100 * found
         figures[f"{name} false, look-alikes (%)"] = 100 * measured.false
-        figures[f"{name} false, containing EXIT (%)"] = 100 * measured.false_containing
+        for kind, false in measured.false_by_kind.items():
+            figures[f"{name} false, {kind} (%)"] = 100 * false
     return figures
 
 

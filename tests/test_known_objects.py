@@ -14,8 +14,10 @@ from abcwc.behaviours.navigator import Navigator
 from abcwc.experiments.sign_sweep import (
     CONDITIONS,
     LAB_GEOMETRY,
+    alike_letters,
     look_alike_words,
     sweep_sign_views,
+    word_kind,
 )
 from abcwc.experiments.views import random_views
 from abcwc.geometry import compose
@@ -27,6 +29,7 @@ from abcwc.perception.known_objects import (
     plausible_outline,
     ratio_test,
     region_correlation,
+    stroke_residual,
 )
 from abcwc.perception.signs import SIGN_SIZE, WORD_BOX, house_sign
 from abcwc.sim.base import SimBase
@@ -130,6 +133,52 @@ def test_the_word_region_tells_the_look_alike_apart():
     assert region_correlation(stairs, np.eye(3), gray, WORD_BOX) < 0.5
 
 
+def test_a_stroke_missing_or_added_is_read_where_the_cells_pass():
+    """F and Z drawn for E (F lacks E's bottom bar, Z has a diagonal for its upright and
+    middle bar) still correlate 0.68-0.75 in every 4 x 2 cell, full size and at a
+    quarter; their stroke residual is a whole stroke, near 1 of the ink contrast. The
+    real word gives 0, dimmed to half with an offset too (gain and offset cancel); a fit
+    a pixel off leaves only the strokes' edges, under 0.5, and the shift that aligns the
+    word takes those away too."""
+    gray = EXIT.gray
+    quarter = np.diag([0.25, 0.25, 1.0])
+    for word in ("FXIT", "ZXIT"):
+        sign = cv2.cvtColor(house_sign(word), cv2.COLOR_RGB2GRAY)
+        small = cv2.resize(sign, (120, 60), interpolation=cv2.INTER_AREA)
+        for view, homography in ((sign, np.eye(3)), (small, quarter)):
+            assert region_correlation(view, homography, gray, WORD_BOX, 4, 2) > 0.6
+            assert stroke_residual(view, homography, gray, WORD_BOX) > 0.9
+    dimmed = (0.5 * gray + 40).astype(np.uint8)
+    assert stroke_residual(gray, np.eye(3), gray, WORD_BOX) == pytest.approx(0, abs=1e-9)
+    assert stroke_residual(dimmed, np.eye(3), gray, WORD_BOX) < 0.01
+    one_px_off = np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    assert stroke_residual(gray, one_px_off, gray, WORD_BOX, max_shift_px=0) < 0.5
+    assert stroke_residual(gray, one_px_off, gray, WORD_BOX) < 0.05
+
+
+def test_one_letter_look_alikes_made_now_are_refused_and_the_sign_still_found():
+    """Words made at run time changing one of EXIT's letters for one whose glyph is much
+    like it: their plate, margins and cells pass in some views (the trap is real), the
+    stroke residual refuses every one; the real sign is still found."""
+    words = [w for w in look_alike_words("EXIT", 30, 11) if word_kind(w, "EXIT")
+             == "one letter alike"]
+    assert len(words) == 5
+    seen = ObjectDetector([EXIT], verify=False)
+    detector = ObjectDetector([EXIT])
+    passed_the_cells = 0
+    for k, word in enumerate(words):
+        for view in random_views(house_sign(word), 0.6, 3, 40 + k, (1.5, 4.0), 0.4,
+                                 math.radians(40), (1.1, 1.3)):
+            found = seen.detect(view.gray)
+            assert detector.detect(view.gray) == []
+            passed_the_cells += bool(found) and (found[0].plate >= 0.6 and found[0].margins <= 0.35
+                                                 and found[0].correlation >= 0.6)
+            assert not found or found[0].residual > detector.max_residual
+    assert passed_the_cells >= 2
+    real = sweep_sign_views(detector=detector, count=6, seed=41, **LAB_GEOMETRY)
+    assert real.verified.sum() >= 5
+
+
 def test_the_blank_margins_are_where_the_word_is_not_written():
     """The reference's blank columns beside the word: from the box's edges to where
     OpenCV's own measure of the text (getTextSize, as house_sign centres it) begins and
@@ -215,9 +264,25 @@ def test_look_alike_words_are_made_fresh_and_never_the_known_word():
     assert len(set(words)) == 24 and "EXIT" not in words
     assert all(1 <= len(w) <= 8 and w.isalpha() and w.isupper() for w in words)
     assert sum("EXIT" in w for w in words) == 8  # a third contain it
+    alike = [w for w in words if word_kind(w, "EXIT") == "one letter alike"]
+    assert len(alike) == 4  # every other word of the second third
+    assert all(sum(a != b for a, b in zip(w, "EXIT")) == 1 for w in alike)
     assert look_alike_words("EXIT", 24, 3) == words != look_alike_words("EXIT", 24, 4)
     with pytest.raises(ValueError, match="1-6 letters"):
         look_alike_words("EMERGENCY", 3, 0)
+
+
+def test_the_letters_most_alike_share_their_strokes():
+    """F is E without its bottom bar, T and I share an upright, K and X their arms; O
+    shares no straight stroke with E."""
+    assert "F" in alike_letters("E") and "O" not in alike_letters("E")
+    assert alike_letters("T", 1) == ("I",) and alike_letters("X", 1) == ("K",)
+    assert word_kind("NEXIT", "EXIT") == "containing"
+    assert word_kind("EXIS", "EXIT") == "letters changed"  # S is not among T's most alike
+    assert word_kind("LOOT", "EXIT") == "letters changed"
+    assert word_kind("OZQ", "EXIT") == "other"
+    with pytest.raises(ValueError, match="capital letter"):
+        alike_letters("e")
 
 
 @pytest.fixture(scope="module")

@@ -242,7 +242,8 @@ def _slam(args: argparse.Namespace) -> int:
 
 NAVTRIAL_GOAL_FIGURES = ("status", "reason", "reached", "seconds", "driven", "straight",
                          "planned", "final_error", "final_heading_error", "collisions",
-                         "lethal_periods", "closest_person", "max_localisation_error", "phases")
+                         "lethal_periods", "closest_person", "max_localisation_error", "phases",
+                         "recoveries")
 """Each goal's figures in ``navtrial --json`` (m, s, rad; GoalOutcome's names)."""
 
 

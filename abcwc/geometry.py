@@ -156,6 +156,20 @@ def inverse_transform_points(pose: PoseLike, points: np.ndarray) -> np.ndarray:
     return transform_points(_as_poses(inverse(_as_poses(pose))), points)
 
 
+def densify_polyline(points: np.ndarray, spacing: float) -> np.ndarray:
+    """Points along the polyline ``points`` (K, 2, m) no more than ``spacing`` m apart:
+    each segment cut into equal pieces, its corners kept."""
+    points = np.asarray(points, dtype=float)
+    if len(points) < 2:
+        return points
+    steps = points[1:] - points[:-1]
+    counts = np.maximum(1, np.ceil(np.hypot(*steps.T) / spacing).astype(int))
+    segment = np.repeat(np.arange(len(steps)), counts)
+    piece = np.arange(len(segment)) - np.repeat(np.cumsum(counts) - counts, counts) + 1
+    fraction = piece / counts[segment]  # 1/n, 2/n, .. 1 along each segment
+    return np.concatenate([points[:1], points[:-1][segment] + fraction[:, None] * steps[segment]])
+
+
 def rotation_matrix(theta: float) -> np.ndarray:
     """The 2x2 rotation ``R(theta)`` (counter-clockwise, rad)."""
     c, s = math.cos(theta), math.sin(theta)

@@ -4,6 +4,7 @@ plausible wrong answers, the unwritten stub and abcwc's own function handed in."
 
 from __future__ import annotations
 
+import functools
 import heapq
 import math
 
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 
 from abcwc.checks import ch16
+from abcwc.navigation.dwa import DwaPlanner
 from abcwc.navigation.planner import astar_search
 from tests.check_helpers import assert_not_yet, assert_pass, not_written
 
@@ -125,3 +127,93 @@ def test_door_scales_pass_a_different_fix(capsys):
 ])
 def test_door_scales_refuse_wrong_answers(wrong, fragment, capsys):
     assert_not_yet(ch16.door_scales_check(wrong), capsys, fragment)
+
+
+# --- exercise 4: the chair's minimum clear width ------------------------------------------
+
+
+def student_clear_width(length, width, padding, resolution):
+    """Written from the text: three circles along the chair, each over a third of its
+    length; the padding; half a cell's diagonal for the wall's cell and for the chair's."""
+    third = length / 3
+    circle = math.sqrt((third / 2) ** 2 + (width / 2) ** 2)
+    return 2 * circle + 2 * padding + 2 * resolution * math.sqrt(2)
+
+
+def test_clear_width_passes_an_independent_answer(capsys):
+    assert_pass(ch16.clear_width_check(student_clear_width), capsys)
+
+
+def test_table_2s_chair_needs_about_0_76_m():
+    assert ch16.reference_clear_width(0.61, 0.482, 0.05, 0.05) == pytest.approx(
+        student_clear_width(0.61, 0.482, 0.05, 0.05), abs=1e-12)
+    assert 0.76 < student_clear_width(0.61, 0.482, 0.05, 0.05) < 0.77
+
+
+@pytest.mark.parametrize(("wrong", "fragment"), [
+    (lambda length, width, padding, res: width + 2 * padding, "the chair's own width"),
+    (lambda length, width, padding, res: 2 * (math.hypot(length / 2, width / 2) + padding),
+     "turning on the spot"),
+    (lambda length, width, padding, res: 2 * (math.hypot(length / 6, width / 2) + padding),
+     "the grid is missing"),
+    (lambda length, width, padding, res: 2 * (math.hypot(length / 6, width / 2) + padding
+                                              + res / math.sqrt(2)), "only one half-diagonal"),
+    (lambda length, width, padding, res: student_clear_width(length, width, padding, res) / 2,
+     "that is a radius"),
+    (lambda length, width, padding, res: 2 * (math.hypot(length / 2, width / 2) + padding
+                                              + res * math.sqrt(2)), "one circle"),
+    (lambda length, width, padding, res: 0.7646, "not the width the local planner needs"),
+    (lambda length, width, padding, res: "0.76", "one number"),
+    (not_written, "not written yet"),
+    (ch16.reference_clear_width, "that is abcwc's own"),
+    (lambda length, width, padding, res: ch16.reference_clear_width(length, width, padding, res),
+     "abcwc's own"),
+    (functools.partial(ch16.reference_clear_width), "abcwc's own"),
+    (lambda length, width, padding, res: 2 * DwaPlanner(ch16.FOOTPRINT).passing_radius(res),
+     "abcwc's own"),
+])
+def test_clear_width_refuses_wrong_answers(wrong, fragment, capsys):
+    assert_not_yet(ch16.clear_width_check(wrong), capsys, fragment)
+
+
+def test_clear_width_messages_do_not_give_the_answer(capsys):
+    ch16.clear_width_check(lambda length, width, padding, res: 0.5)
+    out = capsys.readouterr().out
+    assert "0.765" not in out and "0.764" not in out
+
+
+# --- exercise 5: predict, then run: the doors the chair takes -----------------------------
+
+MEASURED_DOORS = {0.75: False, 0.80: True, 0.85: True, 0.90: True}  # the notebook's runs
+
+
+def test_the_door_family_is_planned_as_the_chair_needs():
+    """The check's own confirmation: the navigator plans through the doors at least the
+    independently worked-out width and round the others."""
+    needs = student_clear_width(0.61, 0.482, 0.05, 0.05)
+    for width in ch16.DOOR_FAMILY:
+        assert ch16._planned_through(width) == (width >= needs)
+
+
+def test_doors_prediction_passes_the_right_doors(capsys):
+    assert_pass(ch16.doors_prediction_check(lambda: [0.9, 0.85, 0.8], MEASURED_DOORS), capsys)
+    assert_pass(ch16.doors_prediction_check(lambda: (0.80, 0.85, 0.90), MEASURED_DOORS), capsys)
+
+
+@pytest.mark.parametrize(("wrong", "fragments"), [
+    (lambda: [0.75, 0.80, 0.85, 0.90], ["[0.75] it went round"]),  # by the chair's own width
+    (lambda: [0.90], ["[0.8, 0.85] it drove through"]),  # by the turning width, or caution
+    (lambda: [0.85, 0.90], ["[0.8] it drove through"]),
+    (lambda: [0.75], ["[0.75] it went round", "[0.8, 0.85, 0.9] it drove through"]),
+    (lambda: 0.8, ["return the widths"]),
+    (lambda: [1.0], ["return the widths"]),
+    (not_written, ["not written yet"]),
+])
+def test_doors_prediction_refuses_wrong_answers(wrong, fragments, capsys):
+    assert_not_yet(ch16.doors_prediction_check(wrong, MEASURED_DOORS), capsys, *fragments)
+
+
+def test_doors_prediction_refuses_a_measurement_that_is_not_the_navigators(capsys):
+    tampered = {**MEASURED_DOORS, 0.75: True}
+    assert_not_yet(ch16.doors_prediction_check(lambda: [0.75, 0.80, 0.85, 0.90], tampered),
+                   capsys, "do not match", "0.75 m door")

@@ -162,9 +162,14 @@ def test_navtrial_json_has_the_trials_figures(monkeypatch, capsys):
 
     outcome = navigation_trial.GoalOutcome(
         Pose2D(1.0, 2.0, 0.5), "failed", "blocked", 12.5, 3.0, 2.5, 2.75, 0.4, 0.1, 1, 2,
-        math.inf, 0.05, 0.25, {"driving": 12.5})
+        math.inf, 0.05, 0.25, {"driving": 12.5},
+        recoveries={"backing off": 2, "closing the gap ahead": 1})
     trial = navigation_trial.TrialResult([outcome], tolerance=0.25)
     monkeypatch.setattr(navigation_trial, "run_trial", lambda **options: trial)
+    assert main(["navtrial", "--goals", "1", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "recoveries: backing off 2 (1 goals), closing the gap ahead 1 (1 goals)" in text
+    assert "goal 0 (1.0, 2.0) not reached: blocked" in text
     assert main(["navtrial", "--goals", "1", "--json"]) == 0
     figures = json.loads(capsys.readouterr().out)
     assert figures["goals"] == 1 and figures["success_rate"] == 0.0
@@ -174,6 +179,7 @@ def test_navtrial_json_has_the_trials_figures(monkeypatch, capsys):
     assert goal["goal"] == [1.0, 2.0, 0.5] and goal["reason"] == "blocked"
     assert goal["reached"] is False and goal["driven"] == 3.0
     assert goal["phases"] == {"driving": 12.5}
+    assert goal["recoveries"] == {"backing off": 2, "closing the gap ahead": 1}
 
 
 def test_dashboard_serves_the_packages_notebook_with_voila(monkeypatch, tmp_path, capsys):

@@ -174,3 +174,14 @@ def test_wrap_angle_is_exact_and_arrays_agree_with_scalars_bit_for_bit():
     assert np.array_equal(wrap_angle(angles), one_by_one)
     # the answer is angle - 2 pi n exactly: 2 pi (the double) plus a small angle wraps back
     assert wrap_angle(np.array([2 * math.pi + 0.25]))[0] == (2 * math.pi + 0.25) - 2 * math.pi
+
+
+def test_densify_polyline_keeps_the_corners_and_the_spacing():
+    from abcwc.geometry import densify_polyline
+
+    corner = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.25]])
+    points = densify_polyline(corner, 0.3)
+    # 1 m in four pieces of 0.25 m, then 0.25 m in one
+    assert np.allclose(points, [[0, 0], [0.25, 0], [0.5, 0], [0.75, 0], [1, 0], [1, 0.25]])
+    assert np.hypot(*np.diff(points, axis=0).T).max() <= 0.3
+    assert np.array_equal(densify_polyline(corner[:1], 0.3), corner[:1])

@@ -311,7 +311,8 @@ def test_near_a_person_the_speed_is_scaled_down_along_the_same_arc(monkeypatch):
     result = _one_sample_result(Twist(0.8, 0.4))
     for x in (4.6, 5.2, 8.0):
         person = np.array([[x, 9.0, 0.0, 0.0, 0.25]])
-        monkeypatch.setattr(navigator.people, "moving_discs", lambda person=person: person)
+        monkeypatch.setattr(navigator.people, "moving_discs",
+                            lambda walked_only=False, person=person: person)
         gap = navigator.dwa.people_gap(pose, np.zeros((1, 2)), person, 0.0)[0]
         expected = min(0.8, s.people_speed + (0.8 - s.people_speed) * gap / s.people_slow_within)
         command = navigator._regulated(result, pose)
@@ -363,3 +364,68 @@ def test_on_a_finished_map_no_plan_crosses_unknown_cells():
     still_mapping = Navigator(growing, MapLocalizer(occupied_points(cells, grid), start))
     still_mapping.go_to(goal)
     assert still_mapping.running and still_mapping.path is not None
+
+
+def test_only_a_track_seen_walking_is_a_walker():
+    """A post the map lacks is tracked as a person standing still; the navigator waits
+    for people in its way (a way they shut is no proof it is too narrow) but not for a
+    post, so PeopleTracker.walkers keeps only the tracks once faster than a walk."""
+    room = [[[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]]]
+    post = [[[5.0, 7.0], [5.2, 7.0], [5.2, 7.2], [5.0, 7.2], [5.0, 7.0]]]
+    walker = {"name": "w", "path": [[3.0, 1.0], [3.0, 9.0]], "speed": 0.8, "radius": 0.25,
+              "loop": False}
+    places = {"start": [7.0, 5.0, math.pi]}
+    world = world_from_dict({"name": "room", "walls": room + post, "places": places,
+                             "people": [walker]})
+    static = Navigator.for_world(world_from_dict({"name": "map", "walls": room,
+                                                  "places": places})).static_map
+    tracker = PeopleTracker(static.cost == 254, static)
+    chair = SimBase(world, seed=8, lidar=True)
+    sensor = Pose2D(7.0 - chair.params.lidar.mount[0], 5.0, math.pi)
+    last = -1.0
+    for _ in range(150):
+        frame = chair.step()
+        if frame.lidar.stamp > last:
+            last = frame.lidar.stamp
+            tracker.update(frame.lidar, sensor, frame.lidar.stamp)
+    positions = np.array([track.position for track in tracker.tracks])
+    assert len(positions) == 2 and np.hypot(*(positions - (5.1, 7.1)).T).min() < 0.3
+    walkers = tracker.walkers()
+    x, y, _ = chair.walkers[0].circle
+    assert walkers.shape == (1, 3) and np.hypot(walkers[0, 0] - x, walkers[0, 1] - y) < 0.1
+    # DWA keeps a person's berth from the walker only; the post is the costmap's
+    assert tracker.moving_discs().shape == (2, 5)
+    assert np.allclose(tracker.moving_discs(walked_only=True)[:, :2], walkers[:, :2])
+
+
+def test_a_speck_the_survey_never_saw_does_not_stop_the_chair():
+    """A map the chair made itself can hold a few unknown cells in open floor (a walker
+    stood in the lidar's way). A finished map's unknown cells are no way, but where the
+    newest scan's beams cross them, the scan wins (costmap_2d's layers combine so): the
+    chair drives down the corridor past the speck, where the plan went beside it."""
+    from abcwc.mapping.grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+    from abcwc.navigation.costmap import FREE_SPACE
+
+    cells = np.full((60, 320), FREE, dtype=np.int8)  # the corridor, 16 x 3 m at 0.05 m
+    cells[[0, -1], :] = OCCUPIED
+    cells[:, [0, -1]] = OCCUPIED
+    cells[26:28, 120:122] = UNKNOWN  # (6.0-6.1, 1.3-1.4): on the chair's way
+    cells[33:35, 160:162] = UNKNOWN  # (8.0-8.1, 1.65-1.75)
+    grid = OccupancyGrid.from_trinary(cells, 0.05, (0.0, 0.0, 0.0))
+    chair = SimBase(_corridor([]), seed=9, lidar=True, people=False)
+    navigator = Navigator.for_map(cells, grid, chair.pose)
+    navigator.go_to(chair.world.places["end"])
+    frame, seen_free = chair.read(), False
+    for _ in range(round(40.0 / chair.params.control_period)):
+        chair.send(navigator(frame), navigator.decided_at)
+        frame = chair.step()
+        local = navigator.local_costmap
+        if local is not None and 4.0 < chair.pose.x < 5.5:
+            rows, cols = local.world_to_cell(np.array([[6.025, 1.325]]))
+            seen_free |= bool(local.contains(rows, cols)[0]
+                              and local.cost[rows[0], cols[0]] == FREE_SPACE)
+        if not navigator.running:
+            break
+    assert seen_free
+    assert navigator.status is Status.SUCCEEDED, navigator.failure
+    assert frame.truth.collisions == 0

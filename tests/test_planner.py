@@ -14,6 +14,7 @@ from abcwc.navigation.planner import (
     NoPathError,
     astar_search,
     cell_weights,
+    costs_to_goal,
     dijkstra_costs,
     plan,
     smooth,
@@ -148,6 +149,28 @@ def test_impossible_goals_say_why():
     assert plan(costmap, (0.5, 0.5), (2.5, 0.5)).cost > 0
     with pytest.raises(NoPathError):
         plan(costmap, (0.5, 0.5), (2.5, 0.5), allow_unknown=False)
+
+
+def test_costs_to_goal_are_each_cells_least_plan_cost():
+    """The progress check's map: from every cell, the cost A* finds to the goal (in free
+    floor metres), and inf where the goal is walled off."""
+    costmap = Costmap(0.05, 40, 30, default=0)
+    costmap.cost[:, 20] = LETHAL
+    costmap.cost[10:14, 20] = 0  # a door
+    costmap.cost[25:, 30] = LETHAL
+    costmap.cost[25, 30:] = LETHAL  # a walled-off corner
+    costmap.inflate(0.1, 0.4)
+    goal = (1.8, 0.3)
+    costs = costs_to_goal(costmap, goal)
+    rng = np.random.default_rng(3)
+    for row, col in zip(rng.integers(0, 30, 25), rng.integers(0, 40, 25)):
+        start = costmap.cell_to_world(np.array([row]), np.array([col]))[0]
+        try:
+            expected = plan(costmap, start, goal).cost * costmap.resolution / COST_NEUTRAL
+        except NoPathError:
+            expected = np.inf
+        assert costs[row, col] == pytest.approx(expected, rel=1e-9)
+    assert np.isinf(costs[27, 35])  # behind the corner's walls
 
 
 def test_dijkstra_costs_are_the_least_costs_scipys_dijkstra_finds():

@@ -2,7 +2,8 @@
 
 :mod:`abcwc.behaviours.base` holds the interface (:class:`Behaviour`,
 :class:`BehaviourBase`, :class:`Status`), below every behaviour: the landmark goers, the
-waypoint follower, the UMBmark square driver and the sonar avoider (here), the navigator
+waypoint follower, the UMBmark square driver and the sonar avoider (here), a
+recorded drive replayed (:mod:`abcwc.behaviours.recorded`), the navigator
 (:mod:`abcwc.behaviours.navigator`), the tag followers (:mod:`abcwc.behaviours.follow`),
 the sign seeker (:mod:`abcwc.behaviours.find_sign`), voice control
 (:mod:`abcwc.behaviours.voice`) and, over them, the mission layer's errands

@@ -7,7 +7,14 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
    ground truth);
 2. **plans** over the global costmap (the static map plus what the lidar sees now,
    inflated) with :func:`~abcwc.navigation.planner.plan`, again every
-   ``1 / planner_frequency`` s;
+   ``1 / planner_frequency`` s. **One passability**: the costmap keeps the chair's
+   centre :meth:`~abcwc.navigation.dwa.DwaPlanner.passing_radius` (0.38 m) from every
+   wall cell, not only the inscribed radius (0.16 m), so the planner plans only through
+   gaps the local planner takes (the chair needs 0.76 m between wall cells), and a gap
+   it would refuse costs the planner the detour round it. In **door mode** the plan
+   through a door less than ``door_margin`` each side wider than that follows the
+   door's axis for ``door_approach`` m either side, and the chair slows to
+   ``narrow_speed``, so that it lines up before it enters (:meth:`_through_doors`);
 3. **follows** it with :class:`~abcwc.navigation.dwa.DwaPlanner` on a rolling local
    costmap (5 x 5 m) built from the static map, the newest scan and the sonar's and IR
    rangers' marks that the map does not explain (a
@@ -22,17 +29,25 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
 5. **re-localises** when the localiser is lost: it stops and searches round its
    estimate for where the scan fits the map (with ``relocalise_turn`` set, as the
    mission layer sets it, turning on the spot a little between searches);
-6. **recovers** when no safe trajectory is left or the chair has not moved
-   ``oscillation_distance`` in ``oscillation_timeout`` s (move_base's oscillation
-   check): it waits ``controller_patience`` s for the way to clear (people move), then
-   backs off a little if the IR ring sees the way behind clear, then re-plans; after
-   ``max_recoveries`` recoveries without progress it gives up with the reason.
+6. **recovers** when no safe trajectory is left or the chair has come no
+   ``oscillation_distance`` nearer the goal (the least way left on the map) in
+   ``oscillation_timeout`` s (Nav2's progress checker, judged by the goal): it waits
+   ``controller_patience`` s for the way to clear (people move), then recovers, in
+   order (after Nav2's recovery tree): backs off a little if the IR ring sees the way
+   behind clear (else turns on the spot), clears the local costmap's sonar and IR marks,
+   lines up with the gap ahead (door mode for it) if the map says the chair fits it and
+   it was entered askew, closes the gap ahead and plans round it if the map has a way
+   round, backs off again; after ``max_recoveries`` recoveries without progress it gives
+   up with the reason. A walker in the way is waited for (``people_patience`` s) before
+   each of these: a way that people shut is no proof that it is too narrow.
 
 It ends **succeeded**, or **failed** with a reason a person can act on: the goal is
-off the map or in a wall, no path leads there, the chair is stuck, lost, or out of
-time, or the goal was cancelled. Every command it sends passes through the body's
-:class:`~abcwc.control.safety.SafetyFilter` in the control loop (:mod:`abcwc.base`):
-there is no way round it; its DWA plans brakes the filter's ramp can follow.
+off the map or in a wall, no path leads there, no passable way (naming the gap: "the
+0.75 m gap at (6.03, 2.50) is narrower than the chair needs, 0.76 m"), the chair is
+stuck, lost, or out of time, or the goal was cancelled. Every command it sends passes
+through the body's :class:`~abcwc.control.safety.SafetyFilter` in the control loop
+(:mod:`abcwc.base`): there is no way round it; its DWA plans brakes the filter's ramp
+can follow.
 
 :class:`NavigatorSettings` holds A.17's values where they suit a chair with a person
 in it, and says why where they do not.
@@ -50,10 +65,11 @@ from scipy import ndimage
 from abcwc.behaviours.base import BehaviourBase
 from abcwc.control.safety import ClearanceCheck, range_sensor_rays
 from abcwc.estimation.ekf import ChairEkf
-from abcwc.geometry import compose, position_of, wrap_angle
+from abcwc.geometry import compose, densify_polyline, position_of, wrap_angle
 from abcwc.mapping.grid import GridGeometry
 from abcwc.navigation.costmap import (
     FREE_SPACE,
+    INSCRIBED,
     LETHAL,
     NO_INFORMATION,
     Costmap,
@@ -62,8 +78,15 @@ from abcwc.navigation.costmap import (
 )
 from abcwc.navigation.dwa import DwaPlanner, DwaResult
 from abcwc.navigation.localization import MapLocalizer, occupied_points, wall_points
+from abcwc.navigation.passages import (
+    Gap,
+    close_gap,
+    gaps_along,
+    minimum_clear_width,
+    narrowest_gap,
+)
 from abcwc.navigation.people import PeopleTracker, predicted_sweep, standing_still
-from abcwc.navigation.planner import NoPathError, Path, plan
+from abcwc.navigation.planner import NoPathError, Path, costs_to_goal, plan
 from abcwc.navigation.range_layer import RangeSensorLayer
 from abcwc.params import ChairParams, default_params, load_navigation_params
 from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame, Twist
@@ -121,6 +144,12 @@ class NavigatorSettings:
       cell is wider than a door's clearance).
     * recoveries on (A.17 off): a chair that stops for good in a corridor because a
       person stood in its way has failed its passenger.
+    * ``door_margin`` 0.15 m and ``door_approach`` 1 m (A.17 has no door mode): the
+      floor's 1 m doors fall inside it; turning into one from the 2 m corridor, beside a
+      walker, without it, the chair swung a corner onto a jamb and wedged there.
+    * ``scan_mark_wall_distance`` 0.15 m: a return this near a mapped wall is the wall;
+      marked for the plan beside it, a jamb's returns narrowed a 0.80 m door below the
+      passing width, and the plan flipped between the door and the way round.
     """
 
     controller_frequency: float = 5.0  # Hz, A.17
@@ -152,11 +181,20 @@ class NavigatorSettings:
     footprint_padding: float = 0.05  # m round the footprint in DWA's collision check
     range_mark_wall_distance: float = 0.25  # m: sonar/IR marks this near a map wall are it
     range_mark_decay: float = 1.0  # s: time constant of the sonar/IR marks' fading
+    scan_mark_wall_distance: float = 0.15  # m: lidar marks this near a map wall are it
     relocalise_patience: float = 10.0  # s of searching for the chair's place when lost
     relocalise_turn: float | None = None  # rad turned on the spot between searches when lost
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.15  # m/s
     max_recoveries: int = 4
+    people_in_the_way: float = 1.0  # m from the plan's next people_look_ahead m: in the way
+    people_look_ahead: float = 3.0  # m of plan ahead where a person blocks the chair's way
+    people_patience: float = 20.0  # s a person may keep the way shut before recoveries count
+    gap_look_ahead: float = 1.5  # m of plan ahead searched for the gap a recovery closes
+    gap_width: float = 1.5  # m: a gap at most this wide may be closed by a recovery
+    door_margin: float = 0.15  # m each side beyond the chair's need: narrower is a door
+    door_approach: float = 1.0  # m each side of a door's middle followed along its axis
+    doubt_after: int = 3  # scans in a row that do not fit the map: drive at narrow_speed
     goal_timeout: float | None = None  # s; None: 60 s + 3 x the plan's length / max_vel_x
 
     def __post_init__(self) -> None:
@@ -211,6 +249,9 @@ class Navigator(BehaviourBase):
             local, padding=s.footprint_padding,
             braking_delay=(self.stopping.reaction_time
                            + s.acc_lim_x / self.stopping.limits.max_jerk))
+        # the planner keeps the chair's centre as far from obstacles as DWA's check does
+        # (module notes, "one passability")
+        self.passing_radius = self.dwa.passing_radius(static_map.resolution)
         self._rays = range_sensor_rays(p)
         self._use_map(static_map)
         self._last_scan_stamp = -math.inf
@@ -263,6 +304,7 @@ class Navigator(BehaviourBase):
         self.people = PeopleTracker(static_map.cost == LETHAL, static_map)
         self.range_layer = RangeSensorLayer(static_map)
         self._range_stamp: float | None = None
+        self._inscribed_costmap: Costmap | None = None  # built when a plan fails
         # m from each map cell to the nearest wall: range marks this near are the wall's
         self._wall_distance = ndimage.distance_transform_edt(
             static_map.cost != LETHAL) * static_map.resolution
@@ -291,7 +333,8 @@ class Navigator(BehaviourBase):
             return
         if cost >= LETHAL - 1:
             self.fail(f"the goal ({gx:.2f}, {gy:.2f}) m is too close to a wall for the "
-                      f"chair (closer than its inscribed radius)")
+                      f"chair (closer than the {self.passing_radius:.2f} m its centre keeps "
+                      f"from walls)")
             return
         self._replan(self.localizer.pose, math.nan)
 
@@ -387,12 +430,18 @@ class Navigator(BehaviourBase):
         ahead = self._path_ahead(pose)
         along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
         pruned = ahead[along <= s.forward_prune_distance]
+        # people are those seen walking; a track that never walked is a thing the map
+        # lacks (a door frame a self-made map drew short), and its returns are in the
+        # local costmap as any obstacle's: kept out of, not given a person's berth
         result = self.dwa.plan(local, pose, self.localizer.velocity, pruned,
-                               self.people.moving_discs(), s.people_horizon)
-        if result.evading:
+                               self.people.moving_discs(walked_only=True), s.people_horizon)
+        no_progress = self._oscillating(frame.t, pose)
+        if result.evading and not no_progress:
             self._phase = "keeping out of a person's way"
             return result.command
-        if not result.stuck and not self._oscillating(frame.t, pose):
+        # evading that gets nowhere for oscillation_timeout s is being stuck, too: a
+        # person who stands in a doorway would keep the chair out of her way for ever
+        if not result.stuck and not no_progress:
             self._blocked_since = None
             self._phase = "driving"
             return self._slowed_for_the_goal(self._regulated(result, pose), pose)
@@ -466,15 +515,30 @@ class Navigator(BehaviourBase):
           "Human-aware robot navigation: a survey", Robotics and Autonomous Systems
           61(12), 2013). A person who sees the chair coming may stop in its way, which
           no prediction at constant velocity foresees; at a walking-beside speed the
-          chair still stops short."""
+          chair still stops short. Only people seen walking count: a track that never
+          walked is a post, and the gap above already holds it;
+        * at ``narrow_speed`` while the localiser's last ``doubt_after`` scans in a row
+          did not fit the map (beams through its walls): a chair carried or slipped off
+          its place drives on by a wrong estimate until the localiser says lost, and the
+          slower it goes the nearer it stays to where its search looks."""
         s, command = self.settings, result.command
         cap = max(s.narrow_speed, s.max_vel_x * max(result.gap, 0.0) / s.slow_within)
-        discs = self.people.moving_discs()
+        near_door = min((math.hypot(pose.x - door.x, pose.y - door.y) for door in self.doors),
+                        default=math.inf)
+        if near_door < 2 * s.door_approach:  # door mode: slowly, to line up, from a
+            # door_approach out (where the axis begins), at narrow_speed inside it
+            cap = min(cap, s.narrow_speed + (s.max_vel_x - s.narrow_speed)
+                      * max(near_door / s.door_approach - 1.0, 0.0))
+        discs = self.people.moving_discs(walked_only=True)
         if len(discs):
             near = float(self.dwa.people_gap(pose, np.zeros((1, 2)), standing_still(discs),
                                              0.0)[0])
             cap = min(cap, s.people_speed + (s.max_vel_x - s.people_speed)
                       * min(max(near, 0.0) / s.people_slow_within, 1.0))
+        if self.localizer.rejected_in_a_row >= s.doubt_after:
+            # scans refused with beams through the map's walls: the estimate is in doubt
+            # (a chair carried off its place, or slipped), so slowly until it is settled
+            cap = min(cap, s.narrow_speed)
         if command.v <= cap:
             return command
         return Twist(cap, command.w * cap / command.v)
@@ -499,16 +563,30 @@ class Navigator(BehaviourBase):
         self._blocked_since: float | None = None
         self._recovery: tuple[str, float, Pose2D] | None = None
         self._recoveries = 0
+        self._people_wait_since: float | None = None  # blocked by people since, s
+        self._stuck_at = math.inf  # m to go (_to_go) when the first recovery began
+        self._closed: list[Gap] = []  # gaps closed by a recovery, for this goal
+        self._only_way: Gap | None = None  # a gap the chair is stuck at with no way round
+        self.recoveries_used: dict[str, int] = {}  # this goal's recoveries, by kind
+        self._best_remaining = math.inf  # m to go (_to_go) at the last progress
+        self._to_goal: np.ndarray | None = None  # m to go from every cell
+        self.doors: list[Gap] = []  # the narrow doors on the plan (door mode)
+        self._lined_up: list[Gap] = []  # gaps a recovery put in door mode, for this goal
         self._anchor: tuple[float, Pose2D] | None = None
         self._phase = "planning"
         self._keep_heading = True
         self.path = None
 
-    def _inflated(self, cost: np.ndarray, grid: GridGeometry) -> Costmap:
+    def _inflated(self, cost: np.ndarray, grid: GridGeometry,
+                  keep_out: bool = True) -> Costmap:
+        """``cost`` inflated; with ``keep_out`` the centre is kept ``passing_radius`` m
+        from obstacles (the planner's map), else only the inscribed radius (costmap_2d's
+        rule, which names the gap a refused plan would have squeezed through)."""
         costmap = Costmap.like(grid)
         costmap.cost = cost
         costmap.inflate(self.footprint.inscribed_radius, self.settings.inflation_radius,
-                        self.settings.cost_scaling_factor)
+                        self.settings.cost_scaling_factor,
+                        keep_out_radius=self.passing_radius if keep_out else 0.0)
         return costmap
 
     def _with_obstacles(self, marks: np.ndarray) -> Costmap:
@@ -523,7 +601,7 @@ class Navigator(BehaviourBase):
         patch = Costmap(grid.resolution, c1 - c0, r1 - r0, grid.origin)  # cells alone matter
         patch.cost = np.where(marks[box], LETHAL, grid.cost[box]).astype(np.uint8)
         patch.inflate(self.footprint.inscribed_radius, self.settings.inflation_radius,
-                      self.settings.cost_scaling_factor)
+                      self.settings.cost_scaling_factor, keep_out_radius=self.passing_radius)
         costmap = Costmap.like(grid)
         costmap.cost = self.global_costmap.cost.copy()
         costmap.cost[box] = np.maximum(costmap.cost[box], patch.cost)
@@ -531,21 +609,28 @@ class Navigator(BehaviourBase):
 
     def _build_local_costmap(self, frame: SensorFrame, pose: Pose2D) -> Costmap:
         """The rolling window: the static map's cells under it, the newest scan's returns
-        marked (and its beams cleared), then inflation."""
+        marked (and its beams cleared), then inflation. As costmap_2d's layers combine
+        (``updateWithMax``), what the scan saw overrides the map's *unknown* cells: a
+        speck the survey never saw (a walker stood in the lidar's way while it mapped)
+        is free where the scan's beams now cross it, instead of a wall no plan knows of."""
         s = self.settings
-        local = Costmap.rolling_window(pose, s.local_size, s.resolution, default=FREE_SPACE)
+        local = Costmap.rolling_window(pose, s.local_size, s.resolution,
+                                       default=NO_INFORMATION)
         rows, cols = np.indices(local.shape)
         centres = local.cell_to_world(rows.ravel(), cols.ravel())
         g_rows, g_cols = self.static_map.world_to_cell(centres)
         on_map = self.static_map.contains(g_rows, g_cols)
         static = np.full(local.shape[0] * local.shape[1], NO_INFORMATION, dtype=np.uint8)
         static[on_map] = self.static_map.cost[g_rows[on_map], g_cols[on_map]]
+        static = static.reshape(local.shape)
         scan = frame.readings.get(LIDAR_FRAME)
         if isinstance(scan, LaserScan):
             sensor = compose(pose, self.params.lidar.mount)
             local.add_scan(scan, sensor, s.obstacle_range, s.raytrace_range)
         self._seen = local.cost == LETHAL  # what the scan marks, walls included
-        local.cost = np.maximum(local.cost, static.reshape(local.shape))
+        seen = local.cost != NO_INFORMATION
+        local.cost = np.where(seen & (static == NO_INFORMATION), local.cost,
+                              np.maximum(np.where(seen, local.cost, FREE_SPACE), static))
         self._add_range_marks(frame, pose, local)
         local.inflate(self.footprint.inscribed_radius, s.inflation_radius,
                       s.cost_scaling_factor)
@@ -581,7 +666,9 @@ class Navigator(BehaviourBase):
             # where people will walk: the plan goes round it, not into their way
             marks |= predicted_sweep(self.people.moving_discs(), self.static_map,
                                      s.people_horizon)
-            marks &= self.static_map.cost != LETHAL
+            # a return this near a mapped wall is the wall (the estimate's few cm): marked
+            # beside it, it would narrow every door by a cell
+            marks &= self._wall_distance > s.scan_mark_wall_distance
             if marks.any():
                 costmap = self._with_obstacles(marks)
         # what the scan sees may be people in a doorway: if it blocks every way, plan on
@@ -595,16 +682,21 @@ class Navigator(BehaviourBase):
                 reason = str(error)
         if found is None:
             if local is None:  # the first plan: the goal cannot be reached from here
-                self.fail(f"no path to the goal: {reason}")
+                self.fail(self._no_way(pose, reason))
                 return
             if self._plan_failing_since is None:
                 self._plan_failing_since = now
             if now - self._plan_failing_since > s.planner_patience:
-                self.fail(f"no path to the goal for "
-                          f"{now - self._plan_failing_since:.0f} s: {reason}")
+                self.fail(f"{self._no_way(pose, reason)} (for "
+                          f"{now - self._plan_failing_since:.0f} s)")
             return
         self._plan_failing_since = None
-        self.path = found  # followed as planned: see NavigatorSettings on smoothing
+        # followed as planned (see NavigatorSettings on smoothing), but straight along
+        # the axis of every narrow door
+        self.path = self._through_doors(found, costmap)
+        if self._to_goal is None:  # the progress check's measure, for this goal
+            self._to_goal = costs_to_goal(self._closed_map(self.global_costmap), self.goal,
+                                          allow_unknown=self.allow_unknown)
         if not math.isfinite(self._timeout):
             self._timeout = (self.settings.goal_timeout if self.settings.goal_timeout
                              else 60.0 + 3.0 * self.path.length / s.max_vel_x)
@@ -624,12 +716,144 @@ class Navigator(BehaviourBase):
         return bool(len(discs)) and bool((np.hypot(discs[:, 2], discs[:, 3]) > 0.2).any())
 
     def _plan_on(self, costmap: Costmap, pose: Pose2D) -> Path:
+        costmap = self._closed_map(costmap)
         return plan(costmap, _free_start(costmap, pose), self.goal,
                     allow_unknown=self.allow_unknown)
 
+    def _closed_map(self, costmap: Costmap) -> Costmap:
+        """``costmap`` with the gaps a recovery closed shut."""
+        for gap in self._closed:
+            costmap = close_gap(costmap, gap)
+        return costmap
+
+    def _to_go(self, pose: Pose2D) -> float:
+        """m (free floor metres) of the least way from the chair to the goal on the
+        planner's map: the progress check's measure, which does not change with the
+        plan (a plan that flips between two ways would otherwise reset it)."""
+        if self._to_goal is None:
+            return math.inf
+        x, y = _free_start(self.global_costmap, pose)
+        rows, cols = self.global_costmap.world_to_cell(np.array([[x, y]]))
+        if not self.global_costmap.contains(rows[0], cols[0]):
+            return math.inf
+        return float(self._to_goal[rows[0], cols[0]])
+
+    def _no_way(self, pose: Pose2D, reason: str) -> str:
+        """Why no plan keeps the chair's centre ``passing_radius`` from walls: the gap the
+        way would have to squeeze through, found by planning with only the inscribed
+        circle kept out (costmap_2d's rule), or the planner's own ``reason``."""
+        if self._inscribed_costmap is None:
+            self._inscribed_costmap = self._inflated(self.static_map.cost.copy(),
+                                                     self.static_map, keep_out=False)
+        refused = ", ".join(gap.describe() for gap in self._closed)
+        refused = (f"the chair found no safe way through {refused} "
+                   f"({self._recoveries} recoveries)" if refused else "")
+        try:
+            squeezed = self._plan_on(self._inscribed_costmap, pose)
+        except NoPathError:
+            if refused:
+                return f"no passable way to the goal: {refused}, and no other way leads there"
+            return f"no path to the goal: {reason}"
+        gap = narrowest_gap(self.static_map, squeezed.cells, self.passing_radius)
+        if gap is None:
+            narrow = (f"the only way passes closer to a wall than the "
+                      f"{self.passing_radius:.2f} m the chair's centre keeps")
+        else:
+            narrow = (f"{gap.describe()} is narrower than the chair needs, "
+                      f"{minimum_clear_width(self.passing_radius):.2f} m")
+        if refused:
+            return f"no passable way to the goal: {refused}, and the other way: {narrow}"
+        return f"no {'passable way' if gap else 'path'} to the goal: {narrow}"
+
+    def _through_doors(self, path: Path, costmap: Costmap) -> Path:
+        """Door mode: where the path goes through a gap less than ``door_margin`` m each
+        side wider than the chair needs, the path within ``door_approach`` m of the
+        gap's middle is replaced by the gap's axis, so that the chair lines up with the
+        opening before it enters and follows its centre line through (as a person
+        pushing a wheelchair does; the last metre of Nav2's docking approach). Each side
+        of the axis is cut short where it would leave the planner's free cells."""
+        s = self.settings
+        narrow = minimum_clear_width(self.passing_radius) + 2 * s.door_margin
+        doors = [g for g in gaps_along(self.static_map, path.cells, self._wall_distance,
+                                       narrow / 2) if g.width < narrow]
+        for gap in self._lined_up:  # wider on the map, but the chair could not get in
+            if (np.hypot(*(path.points - (gap.x, gap.y)).T).min() < s.door_approach
+                    and not any(_same_gap(gap, door) for door in doors)):
+                doors.append(gap)
+        doors.sort(key=lambda g: int(np.argmin(np.hypot(*(path.points - (g.x, g.y)).T))))
+        self.doors = doors
+        points = path.points
+        for door in doors:
+            across = np.array([math.cos(door.across), math.sin(door.across)])
+            centre = self._centred_in_view(np.array([door.x, door.y]), across)
+            unit = np.array([-across[1], across[0]])
+            distance = np.hypot(*(points - centre).T)
+            k = int(np.argmin(distance))
+            outside = distance > s.door_approach
+            i0 = int(np.flatnonzero(outside[:k])[-1]) if outside[:k].any() else 0
+            i1 = k + int(np.flatnonzero(outside[k:])[0]) if outside[k:].any() else len(points) - 1
+            if (points[i1] - points[i0]) @ unit < 0:  # the axis the way the path goes
+                unit = -unit
+            before = self._free_along(costmap, centre, -unit)
+            after = self._free_along(costmap, centre, unit)
+            if i0 == 0:  # the path starts near the door: the axis from level with it
+                before = min(before, max(-float((points[0] - centre) @ unit), 0.0))
+            if i1 == len(points) - 1:  # and ends near it: the axis up to level with its end
+                after = min(after, max(float((points[-1] - centre) @ unit), 0.0))
+            along = np.arange(-before, after + s.resolution / 2, s.resolution)
+            points = np.concatenate([points[:i0 + 1], centre + along[:, None] * unit,
+                                     points[i1:]])
+        if not doors:
+            return path
+        rows, cols = self.static_map.world_to_cell(points)
+        return Path(np.column_stack([rows, cols]), points, path.cost)
+
+    def _centred_in_view(self, centre: np.ndarray, across: np.ndarray,
+                         reach: float = 0.3) -> np.ndarray:
+        """``centre`` moved up to ``reach`` m along ``across`` (a unit vector from one
+        side of a door to the other) to the point farthest from both sides as the local
+        costmap sees them now: a map the chair made itself may place a door's frame a
+        cell or more off (scans graze it), and the lidar sees where it truly is."""
+        local = self.local_costmap
+        if local is None:
+            return centre
+        offsets = np.arange(-reach, reach + local.resolution / 2, local.resolution)
+        points = centre + offsets[:, None] * across
+        rows, cols = local.world_to_cell(points)
+        if not local.contains(rows, cols).all():
+            return centre
+        clearance = ndimage.distance_transform_edt(local.cost != LETHAL)[rows, cols]
+        best = np.flatnonzero(clearance == clearance.max())
+        return points[best[np.argmin(np.abs(offsets[best]))]]
+
+    def _free_along(self, costmap: Costmap, centre: np.ndarray, unit: np.ndarray) -> float:
+        """m from ``centre`` along ``unit`` (up to ``door_approach``) over cells the
+        planner may cross."""
+        s = self.settings
+        steps = np.arange(0.0, s.door_approach + s.resolution / 2, s.resolution)
+        rows, cols = costmap.world_to_cell(centre + steps[:, None] * unit)
+        inside = costmap.contains(rows, cols)
+        free = np.zeros(len(steps), dtype=bool)
+        free[inside] = costmap.cost[rows[inside], cols[inside]] < INSCRIBED
+        blocked = np.flatnonzero(~free)
+        return float(steps[blocked[0] - 1]) if blocked.size and blocked[0] > 0 else (
+            0.0 if blocked.size else float(steps[-1]))
+
+    def _gap_ahead(self, pose: Pose2D) -> Gap | None:
+        """The narrowest gap on the map the plan passes within ``gap_look_ahead`` m."""
+        if self.path is None:
+            return None
+        ahead = self._path_ahead(pose)
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
+        rows, cols = self.static_map.world_to_cell(ahead[along <= self.settings.gap_look_ahead])
+        inside = self.static_map.contains(rows, cols)
+        cells = np.column_stack([rows[inside], cols[inside]])
+        gap = narrowest_gap(self.static_map, cells, self.settings.gap_width / 2)
+        return gap if gap is not None and gap.width <= self.settings.gap_width else None
+
     def _path_ahead(self, pose: Pose2D) -> np.ndarray:
         """The plan from its point nearest the chair on, as points every resolution."""
-        points = _densify(self.path.points, self.settings.resolution)  # type: ignore[union-attr]
+        points = densify_polyline(self.path.points, self.settings.resolution)  # type: ignore[union-attr]
         nearest = int(np.argmin(np.hypot(points[:, 0] - pose.x, points[:, 1] - pose.y)))
         return points[nearest:]
 
@@ -654,12 +878,21 @@ class Navigator(BehaviourBase):
         return Twist(0.0, math.copysign(min(s.in_place_turn_rate, 2.0 * abs(error)), error))
 
     def _oscillating(self, now: float, pose: Pose2D) -> bool:
-        """move_base's check: not ``oscillation_distance`` from where the chair was
-        ``oscillation_timeout`` s ago. Progress resets the recovery count."""
-        t0, anchor = self._anchor  # type: ignore[misc]
+        """The progress check (move_base's oscillation check, Nav2's progress checker),
+        judged by the way left to the goal (:meth:`_to_go`), not by moving: no progress
+        when it has not fallen ``oscillation_distance`` below its best in
+        ``oscillation_timeout`` s (a chair that circles in front of a door moves all the
+        time, and gets nowhere). The recovery count resets only when the chair gets
+        ``oscillation_distance`` nearer than where its first recovery began: backing off
+        from a gap and driving up to it again is not progress."""
+        t0, _ = self._anchor  # type: ignore[misc]
         s = self.settings
-        if math.hypot(pose.x - anchor.x, pose.y - anchor.y) >= s.oscillation_distance:
-            self._anchor, self._recoveries = (now, pose), 0
+        remaining = self._to_go(pose)
+        if remaining < self._best_remaining - s.oscillation_distance:
+            self._anchor, self._best_remaining = (now, pose), remaining
+            if remaining < self._stuck_at - s.oscillation_distance:
+                self._recoveries, self._stuck_at, self._only_way = 0, math.inf, None
+            self._people_wait_since = None
             return False
         return now - t0 > s.oscillation_timeout
 
@@ -672,12 +905,63 @@ class Navigator(BehaviourBase):
         if frame.t - self._blocked_since < s.controller_patience:
             self._phase = "waiting for the way to clear"
             return Twist(0.0, 0.0)
+        people = self._person_in_the_way(pose)
+        if not people:
+            self._people_wait_since = None
+        elif self._people_wait_since is None:
+            self._people_wait_since = frame.t
+        if people and frame.t - self._people_wait_since < s.people_patience:
+            # people move: a way they shut is no proof that it is too narrow, so waiting
+            # for them is no recovery (a walker in the simulator, as a person, turns back
+            # within seconds); after people_patience s of it, a recovery makes room
+            self._phase = "waiting for people to pass"
+            self._anchor = (frame.t, pose)  # no progress is owed while they pass
+            return Twist(0.0, 0.0)
+        self._people_wait_since = None  # the next recovery, too, only after a wait
         if self._recoveries >= s.max_recoveries:
-            self.fail(f"stuck: no safe way on after {self._recoveries} recoveries")
+            if people:
+                self.fail(f"blocked by people: they kept the way shut through "
+                          f"{self._recoveries} recoveries")
+                return Twist(0.0, 0.0)
+            if self._only_way is not None:
+                self.fail(f"no passable way to the goal: the chair found no safe way through "
+                          f"{self._only_way.describe()} ({self._recoveries} recoveries), and "
+                          f"no other way leads there")
+                return Twist(0.0, 0.0)
+            gap = self._gap_ahead(pose)
+            where = f" at {gap.describe()}" if gap else ""
+            self.fail(f"stuck{where}: no safe way on after {self._recoveries} recoveries")
             return Twist(0.0, 0.0)
         self._recoveries += 1
         self._blocked_since = None
         self._anchor = (frame.t, pose)
+        self._stuck_at = min(self._stuck_at, self._to_go(pose))
+        if self._recoveries == 2:  # the second: forget what the rangers marked, re-plan
+            self._used("clearing the local costmap")
+            self.range_layer = RangeSensorLayer(self.static_map)
+            self._next_plan = frame.t
+            return Twist(0.0, 0.0)
+        gap = self._gap_ahead(pose) if self._recoveries >= 3 else None
+        if gap is not None and not any(_same_gap(gap, door) for door in self.doors) \
+                and gap.width >= minimum_clear_width(self.passing_radius):
+            # a gap the map says the chair fits, entered askew: line up on its axis
+            # (door mode for it) and try again before giving it up
+            self._used("lining up with the gap")
+            self._lined_up.append(gap)
+            self._replan(pose, frame.t)
+            gap = None
+        elif gap is not None and self._way_round(gap, pose):
+            # the gap ahead (in door mode, and still refused) is closed, and the plan
+            # goes round it
+            self._used("closing the gap ahead")
+            self._closed.append(gap)
+            self._to_goal = None  # measured again on the map with the gap shut
+            self._replan(pose, frame.t)
+            if self.running:  # a new way: progress and the count are measured along it
+                self._best_remaining = self._stuck_at = self._to_go(pose)
+            return Twist(0.0, 0.0)
+        if gap is not None:  # the only way: keep trying it (people move), then give up
+            self._only_way = gap
         behind, _ = self.stopping.clearance(frame, forward=False)
         back = compose(pose, (-s.back_off_distance, 0.0, 0.0))
         if (behind > s.back_off_distance + self.stopping.braking_distance(s.back_off_speed)
@@ -688,8 +972,38 @@ class Navigator(BehaviourBase):
             self._recovery = ("turning on the spot", frame.t, pose)
         else:  # no room to move: keep waiting, which counts as a try
             self._phase = "waiting: no room to back off or turn"
+            self._used("waiting")
             return Twist(0.0, 0.0)
+        self._used(self._recovery[0])
         return self._recover(frame, pose)
+
+    def _person_in_the_way(self, pose: Pose2D) -> bool:
+        """Whether a tracked person (one seen walking: :meth:`PeopleTracker.walkers`)
+        stands or walks within ``people_in_the_way`` m of the plan's next
+        ``people_look_ahead`` m (or of the chair, with no plan)."""
+        discs = self.people.walkers()
+        if not len(discs):
+            return False
+        s = self.settings
+        way = np.array([[pose.x, pose.y]])
+        if self.path is not None and len(self.path.points) > 1:
+            ahead = self._path_ahead(pose)
+            along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
+            way = np.vstack([way, ahead[along <= s.people_look_ahead]])
+        gaps = np.hypot(*(discs[:, None, :2] - way[None, :, :]).transpose(2, 0, 1))
+        return bool((gaps.min(axis=1) - discs[:, 2] <= s.people_in_the_way).any())
+
+    def _used(self, recovery: str) -> None:
+        self.recoveries_used[recovery] = self.recoveries_used.get(recovery, 0) + 1
+
+    def _way_round(self, gap: Gap, pose: Pose2D) -> bool:
+        """Whether the map has a way to the goal with ``gap`` closed too."""
+        costmap = close_gap(self._closed_map(self.global_costmap), gap)
+        try:
+            plan(costmap, _free_start(costmap, pose), self.goal)
+        except NoPathError:
+            return False
+        return True
 
     def _footprint_free(self, poses: list) -> bool:
         """Whether the footprint at every pose is off lethal cells of the local costmap."""
@@ -743,17 +1057,10 @@ def _place(places: dict[str, Pose2D], goal: object) -> Pose2D:
     return Pose2D(*values)
 
 
-def _densify(points: np.ndarray, spacing: float) -> np.ndarray:
-    """Points along the polyline ``points`` (K, 2) no more than ``spacing`` m apart."""
-    if len(points) < 2:
-        return points
-    steps = points[1:] - points[:-1]
-    counts = np.array([max(1, math.ceil(math.hypot(dx, dy) / spacing))
-                       for dx, dy in steps.tolist()])  # pieces of each segment
-    segment = np.repeat(np.arange(len(steps)), counts)
-    piece = np.arange(len(segment)) - np.repeat(np.cumsum(counts) - counts, counts) + 1
-    fraction = piece / counts[segment]  # 1/n, 2/n, .. 1 along each segment
-    return np.concatenate([points[:1], points[:-1][segment] + fraction[:, None] * steps[segment]])
+def _same_gap(a: Gap, b: Gap, within: float = 0.5) -> bool:
+    """Whether two gaps found on different plans are the same opening (middles within
+    ``within`` m)."""
+    return math.hypot(a.x - b.x, a.y - b.y) < within
 
 
 def _free_start(costmap: Costmap, pose: Pose2D) -> tuple[float, float]:

@@ -102,29 +102,23 @@ def error_check(fn: Callable) -> str:
 
 @lru_cache(maxsize=1)
 def floor_survey():
-    """200 s across the floor (the navigator to the lab, the cafeteria and back to the
-    start, seed 14), its lidar scans with the wheel odometry as a laser log, and SLAM with
-    and without loop closure: ``(world, log, laser, with_loops, without)``."""
-    from abcwc.behaviours.navigator import Navigator
+    """200 s across the floor (the start to the lab, the cafeteria and back, seed 14: a
+    drive of the navigator's, recorded in ``data/drives/floor_survey.csv`` and replayed,
+    so that it does not change when the navigator does), its lidar scans with the wheel
+    odometry as a laser log, and SLAM with and without loop closure:
+    ``(world, log, laser, with_loops, without)``."""
+    from abcwc.behaviours.recorded import RecordedDrive
     from abcwc.estimation.odometry import odometry_from_log
     from abcwc.experiments.navigation_trial import calibrated_ekf
     from abcwc.mapping.run_scans import laser_log_from_run
     from abcwc.mapping.slam import SlamSettings, run_slam
+    from abcwc.paths import data_dir
     from abcwc.sim import SimBase
 
     chair = SimBase("floor", seed=14, lidar=True, people=False)
-    navigator = Navigator.for_world(chair.world, ekf=calibrated_ekf(chair))
-    goals = iter(["cafeteria", "start"])
-    navigator.go_to("lab")
-
-    def driver(frame):
-        if not navigator.running:
-            goal = next(goals, None)
-            if goal is not None:
-                navigator.go_to(goal)
-        return navigator(frame)
-
-    log = chair.run(driver, 200.0)
+    calibrated_ekf(chair)  # the 2 s standing still the recording began after
+    drive = RecordedDrive.from_csv(data_dir() / "drives" / "floor_survey.csv")
+    log = chair.run(drive, drive.duration)
     laser = laser_log_from_run(log, odometry_from_log(log, start=chair.world.start))
     return (chair.world, log, laser, run_slam(laser),
             run_slam(laser, SlamSettings(loop_radius=0.0)))

@@ -11,7 +11,13 @@ Exercises:
   the fraction of the cells Dijkstra touches that A* touches on the way to the cafeteria;
 * ``culprit()`` and ``door_scales()``: a diagnosis and its fix: which of A.17's DWA
   scales keeps the chair from turning into a doorway, and scales that take it through
-  doors the notebook never showed.
+  doors the notebook never showed;
+* ``clear_width(length, width, padding, resolution)``: the narrowest door (m, wall cell
+  to wall cell) a chair of that outline can be planned through, by the local planner's
+  model of it (three covering circles, the padding, the grid);
+* ``doors_it_takes()``: written down *before* the run: which of the 0.75, 0.80, 0.85 and
+  0.90 m doors of :func:`narrow_door_world` the chair drives through (the others it goes
+  round).
 
 Each ``reference_*`` function is an answer the notebook falls back on; a check handed
 the library's own function (or a ``reference_*``) says so instead of passing.
@@ -28,23 +34,38 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from abcwc.checks.report import NotYet, checker, expect, expect_no_slip, expect_own, format_value
-from abcwc.navigation.costmap import FREE_SPACE, LETHAL, Costmap, chair_footprint, footprint_cost
+from abcwc.geometry import densify_polyline
+from abcwc.navigation.costmap import (
+    FREE_SPACE,
+    LETHAL,
+    Costmap,
+    Footprint,
+    chair_footprint,
+    footprint_cost,
+)
 from abcwc.navigation.dwa import DwaPlanner, DwaResult
+from abcwc.navigation.passages import minimum_clear_width
 from abcwc.navigation.planner import astar_search, plan
 from abcwc.params import default_params, load_navigation_params
+from abcwc.sim.world import World, world_from_dict
 
 __all__ = [
     "A17_SCALES",
+    "DOOR_FAMILY",
     "DoorRun",
+    "clear_width_check",
     "culprit_check",
     "door_decision",
     "door_planner",
     "door_run",
     "door_scales_check",
     "door_world",
+    "doors_prediction_check",
+    "narrow_door_world",
     "path_cost_check",
     "prediction_check",
     "reference_cheapest_path_cost",
+    "reference_clear_width",
     "reference_door_scales",
     "shown_door",
     "unseen_doors",
@@ -220,14 +241,6 @@ class DoorRun:
     costmap: Costmap
 
 
-def _densify(points: np.ndarray, step: float) -> np.ndarray:
-    out = [points[:1]]
-    for a, b in zip(points[:-1], points[1:]):
-        n = max(1, math.ceil(float(np.hypot(*(b - a))) / step))
-        out.append(a + (b - a) * (np.arange(1, n + 1)[:, None] / n))
-    return np.concatenate(out)
-
-
 def door_planner(scales: dict[str, float]) -> DwaPlanner:
     """DWA with the navigator's limits (0.8 m/s, 0.8 rad/s, no reversing, 0.05 m of
     footprint padding) and the given scoring ``scales``."""
@@ -262,7 +275,7 @@ def door_run(walls: np.ndarray, start: tuple[float, float, float],
     ``tolerance`` m of the goal before ``seconds``."""
     static = Costmap.from_walls(walls, 0.05)
     static.inflate(FOOTPRINT.inscribed_radius, 0.7, 10.0)
-    path = _densify(plan(static, start[:2], goal).points, 0.05)
+    path = densify_polyline(plan(static, start[:2], goal).points, 0.05)
     planner = door_planner(scales)
     period = 1.0 / planner.frequency
     pose, velocity, t, worst = np.array(start, dtype=float), (0.0, 0.0), 0.0, 0
@@ -348,3 +361,137 @@ def door_scales_check(fn: Callable[[], dict]) -> str:
                f"(it ended {math.hypot(goal[0] - run.poses[-1, 0], goal[1] - run.poses[-1, 1]):.1f}"
                " m from the goal)")
     return f"through the shown door and {len(unseen_doors())} unseen ones, touching nothing"
+
+
+# --- exercise 5: the chair's minimum clear width -------------------------------------------
+
+DOOR_FAMILY = (0.75, 0.80, 0.85, 0.90)
+"""m: the doors of :func:`narrow_door_world` the notebook drives through (or round)."""
+
+
+def reference_clear_width(length: float, width: float, padding: float,
+                          resolution: float) -> float:
+    """m: twice the local planner's passing radius for a ``length`` x ``width`` chair
+    grown by ``padding``, on cells of ``resolution`` m."""
+    half_length, half_width = length / 2, width / 2
+    outline = Footprint(np.array([[half_length, half_width], [-half_length, half_width],
+                                  [-half_length, -half_width], [half_length, -half_width]]))
+    return minimum_clear_width(DwaPlanner(outline, NAV, padding=padding)
+                               .passing_radius(resolution))
+
+
+def clear_width_cases(seed: int = 1617) -> list[tuple[float, float, float, float]]:
+    """The chair of table 2 and seeded other outlines: (length, width, padding,
+    resolution), m."""
+    rng = np.random.default_rng(seed)
+    cases = [(0.61, 0.482, 0.05, 0.05)]
+    for _ in range(5):
+        cases.append((float(rng.uniform(0.8, 1.3)), float(rng.uniform(0.55, 0.7)),
+                      float(rng.choice([0.0, 0.02, 0.05])), float(rng.choice([0.025, 0.05]))))
+    return cases
+
+
+@checker("minimum clear width")
+def clear_width_check(fn: Callable) -> str:
+    """``fn(length, width, padding, resolution)`` against the local planner's passing
+    radius, for table 2's chair and outlines the notebook never showed."""
+    expect_own(fn, reference_clear_width, minimum_clear_width, DwaPlanner.passing_radius)
+    for length, width, padding, resolution in clear_width_cases():
+        got = fn(length, width, padding, resolution)
+        chair = f"a {length:.2f} x {width:.2f} m chair, {padding:.2f} m padding, " \
+                f"{resolution:.3f} m cells"
+        expect(isinstance(got, (int, float, np.floating)) and math.isfinite(float(got)),
+               f"{chair} gave {format_value(got)}; return the width as one number, m")
+        got = float(got)
+        expected = reference_clear_width(length, width, padding, resolution)
+        if math.isclose(got, expected, abs_tol=1e-6):
+            continue
+        circle = math.hypot(length / 6, width / 2)
+        half_diagonal = resolution / math.sqrt(2)
+        slips = {
+            "that is the chair's own width with its padding: the local planner checks "
+            "circles that cover the chair, and they stick out past its sides":
+                width + 2 * padding,
+            "that is the width the chair sweeps turning on the spot: through a door it "
+            "goes straight, lined up with the opening": 2 * (math.hypot(length / 2, width / 2)
+                                                            + padding),
+            "one circle round the whole chair: the local planner covers it with three, "
+            "each over a third of its length": 2 * (math.hypot(length / 2, width / 2)
+                                                    + padding + 2 * half_diagonal),
+            "the grid is missing: a wall lies somewhere in its cell and the chair "
+            "somewhere in its own, half a cell's diagonal each": 2 * (circle + padding),
+            "only one half-diagonal of the grid: the wall's cell and the chair's cell "
+            "each add one": 2 * (circle + padding + half_diagonal),
+            "that is a radius: a door has a wall on both sides":
+                circle + padding + 2 * half_diagonal,
+            "the padding counts once: it grows the chair on both sides":
+                2 * (circle + 2 * half_diagonal) + padding,
+        }
+        expect_no_slip(got, slips, lambda got, wrong: math.isclose(got, wrong, abs_tol=1e-6),
+                       suffix=f" ({chair})")
+        raise NotYet(f"{chair}: you gave {got:.3f} m, which is not the width the local "
+                     "planner needs: three circles along the chair, each over a third of "
+                     "its length and its whole width, grown by the padding, and a cell's "
+                     "diagonal for the grid")
+    return (f"{len(clear_width_cases())} outlines: the width the local planner needs, "
+            "every time")
+
+
+# --- exercise 6: predict, then run: which doors does the chair take? ------------------------
+
+
+def narrow_door_world(width: float, way_round: bool = True) -> World:
+    """Two 6 x 5 m rooms joined by a ``width`` m door at (6, 2.5) m, and (``way_round``)
+    a 2 m corridor along their north side that both open on through 1.2 m gaps; the
+    chair starts at (2, 1) m in the west room, the ``office`` goal is (10, 4) m."""
+    low, high = 2.5 - width / 2, 2.5 + width / 2
+    walls = [[[0, 0], [12, 0], [12, 7], [0, 7], [0, 0]],
+             [[6, 0], [6, low]], [[6, high], [6, 5 if way_round else 7]]]
+    walls += ([[[0, 5], [1.0, 5]], [[2.2, 5], [9.6, 5]], [[10.8, 5], [12, 5]]] if way_round
+              else [[[0, 5], [12, 5]]])
+    return world_from_dict({"name": f"two rooms, a {width:.2f} m door", "walls": walls,
+                            "places": {"start": [2.0, 1.0, 0.5], "office": [10.0, 4.0, 0.0]}})
+
+
+def _planned_through(width: float) -> bool:
+    """Whether the navigator's first plan to the office goes through the door."""
+    from abcwc.behaviours.navigator import Navigator
+
+    navigator = Navigator.for_world(narrow_door_world(width))
+    navigator.go_to("office")
+    points = navigator.path.points  # type: ignore[union-attr]
+    at_door = np.abs(points[:, 0] - 6.0) < 0.1
+    return bool(at_door.any() and points[at_door, 1].max() < 5.0)
+
+
+@checker("doors")
+def doors_prediction_check(predicted: Callable[[], object],
+                           measured: dict[float, bool]) -> str:
+    """The doors written down before the run against the doors the chair drove through
+    (``measured``: width -> through it), which the check confirms from the navigator's
+    own plans."""
+    answer = predicted()
+    try:
+        chosen = {round(float(w), 2) for w in answer}  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        chosen = None
+    expect(chosen is not None and chosen <= set(DOOR_FAMILY),
+           f"doors_it_takes() gave {format_value(answer)}; return the widths (m) of the "
+           f"doors the chair goes through, from {list(DOOR_FAMILY)}")
+    for width in DOOR_FAMILY:
+        expect(measured.get(width) == _planned_through(width),
+               f"the measured runs handed to the check do not match the navigator's own "
+               f"plans at the {width:.2f} m door: run the cell above again")
+    taken = {w for w in DOOR_FAMILY if measured[w]}
+    if chosen == taken:
+        return (f"you predicted {sorted(chosen)}, and the chair drove through exactly those "
+                "doors and round the others")
+    missed, extra = sorted(taken - chosen), sorted(chosen - taken)
+    why = []
+    if extra:
+        why.append(f"{extra} it went round: narrower than the width it needs, which is more "
+                   "than its 0.48 m, with the covering circles, the padding and the grid")
+    if missed:
+        why.append(f"{missed} it drove through: the chair needs less than those, lined up "
+                   "with the door (it need not turn in it)")
+    raise NotYet(f"you predicted {sorted(chosen)}: " + "; ".join(why))

@@ -15,7 +15,9 @@ the simulator's ground truth is used only to *judge* it:
 * ``path_ratio``: the distance the chair drove over the straight line from its start to
   the goal (the optimum no chair can beat where walls are in the way), and over the
   static map's shortest plan;
-* ``localisation``: the largest distance between the estimate and the truth.
+* ``localisation``: the largest distance between the estimate and the truth;
+* ``recoveries``: the navigator's recoveries by kind (backing off, clearing the local
+  costmap, closing the gap ahead, ...), and each goal not reached with its reason.
 """
 
 from __future__ import annotations
@@ -61,6 +63,7 @@ class GoalOutcome:
     track: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # true poses, 10 Hz
     estimates: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # the navigator's
     people: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)))  # (K, M, 2) walkers
+    recoveries: dict[str, int] = field(default_factory=dict)  # the navigator's, by kind
 
     @property
     def reached(self) -> bool:
@@ -123,6 +126,13 @@ class TrialResult:
             f"{phase} {100 * seconds / whole:.1f} %"
             for phase, seconds in sorted(totals.items(), key=lambda kv: -kv[1])
             if seconds >= 0.001 * whole))
+        used: dict[str, int] = {}
+        for o in self.outcomes:
+            for kind, count in o.recoveries.items():
+                used[kind] = used.get(kind, 0) + count
+        lines.append("recoveries: " + (", ".join(
+            f"{kind} {count} ({sum(kind in o.recoveries for o in self.outcomes)} goals)"
+            for kind, count in sorted(used.items(), key=lambda kv: -kv[1])) or "none"))
         lines.append("largest localisation error: "
                      f"{max((o.max_localisation_error for o in self.outcomes), default=0):.3f} m")
         for k, o in enumerate(self.outcomes):
@@ -273,7 +283,7 @@ def drive_to_goal(chair: SimBase, navigator: Navigator, goal: Pose2D | str,
         float(np.angle(np.exp(1j * (goal.theta - end.theta)))),
         chair.collisions - collisions0, lethal, closest, worst,
         navigator.settings.xy_goal_tolerance, phases, np.array(track).reshape(-1, 3),
-        np.array(estimates).reshape(-1, 3), np.array(people))
+        np.array(estimates).reshape(-1, 3), np.array(people), dict(navigator.recoveries_used))
 
 
 __all__ = ["GoalOutcome", "Status", "TrialResult", "drive_to_goal", "gap_to_people",

@@ -191,18 +191,28 @@ class Costmap(GridGeometry):
 
     def inflate(self, inscribed_radius: float, inflation_radius: float,
                 cost_scaling_factor: float = COST_SCALING_FACTOR,
-                inflate_unknown: bool = False) -> None:
+                inflate_unknown: bool = False, keep_out_radius: float = 0.0) -> None:
         """costmap_2d's inflation layer: every cell within ``inflation_radius`` (m) of a
         lethal cell takes the higher of its cost and :func:`inflation_cost` of its
         distance (cell centre to cell centre). An unknown cell takes the inflation cost
         only from ``INSCRIBED`` up (any cost above free with ``inflate_unknown``), as
-        costmap_2d's ``updateCosts`` does."""
+        costmap_2d's ``updateCosts`` does.
+
+        ``keep_out_radius`` (m, at most ``inflation_radius``) widens the impassable
+        band: cells nearer than it to a lethal cell are ``INSCRIBED`` too, whatever the
+        inscribed radius. A chair whose local planner checks more than its inscribed
+        circle (:meth:`~abcwc.navigation.dwa.DwaPlanner.passing_radius`) has the global
+        planner keep its centre as far out, so that the two agree on which gaps are
+        passable; the costs beyond it still fall off from the inscribed radius."""
         if not (math.isfinite(inscribed_radius) and inscribed_radius >= 0):
             raise ValueError(f"inscribed_radius must be a finite number >= 0 m, "
                              f"got {inscribed_radius!r}")
         if not (math.isfinite(inflation_radius) and inflation_radius >= inscribed_radius):
             raise ValueError(f"inflation_radius {inflation_radius!r} m must be finite and at "
                              f"least the inscribed radius {inscribed_radius:g} m")
+        if not (math.isfinite(keep_out_radius) and 0 <= keep_out_radius <= inflation_radius):
+            raise ValueError(f"keep_out_radius must be a finite number from 0 to the "
+                             f"inflation radius {inflation_radius:g} m, got {keep_out_radius!r}")
         lethal = self.cost == LETHAL
         if not lethal.any():
             return
@@ -212,6 +222,8 @@ class Costmap(GridGeometry):
         cost = np.zeros_like(self.cost)
         cost[near] = inflation_cost(cells[near] * self.resolution, inscribed_radius,
                                     cost_scaling_factor)
+        kept_out = near & (cells * self.resolution < keep_out_radius) & ~lethal
+        cost[kept_out] = np.maximum(cost[kept_out], INSCRIBED)
         unknown = self.cost == NO_INFORMATION
         take = cost > FREE_SPACE if inflate_unknown else cost >= INSCRIBED
         self.cost = np.where(unknown, np.where(take, cost, self.cost),

@@ -176,6 +176,20 @@ class DwaPlanner:
         if not (lp.sim_time > 0 and lp.sim_granularity > 0 and lp.angular_sim_granularity > 0):
             raise ValueError("sim_time and the sim granularities must be > 0")
 
+    def passing_radius(self, resolution: float) -> float:
+        """m: how far from the nearest obstacle cell's centre the chair's centre must be,
+        anywhere in a cell of ``resolution`` m, for this planner's check to let it
+        stand there in its best heading: the covering circles' radius plus the padding
+        (all three circles sit on the chair's centre line, so lined up with a gap they
+        need what one does), half a cell's diagonal for where in its cell the obstacle
+        lies (the check's own slack), and half a diagonal more for where in its cell the
+        chair is. A global planner that keeps its path's cells this far out
+        (:meth:`~abcwc.navigation.costmap.Costmap.inflate`'s ``keep_out_radius``) plans
+        only through gaps this planner will take."""
+        if not (math.isfinite(resolution) and resolution > 0):
+            raise ValueError(f"resolution must be a finite number > 0 m, got {resolution!r}")
+        return self._radius + resolution * math.sqrt(2)
+
     def window(self, velocity: tuple[float, float]) -> np.ndarray:
         """The (S, 2) ``(v, w)`` samples reachable in one cycle from ``velocity``."""
         v0, w0 = velocity

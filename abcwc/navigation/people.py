@@ -41,6 +41,10 @@ from abcwc.geometry import PoseLike, transform_points
 from abcwc.mapping.grid import GridGeometry
 from abcwc.types import LaserScan
 
+WALKING = 0.3
+"""m/s: a confirmed track once this fast is a person walking (a post the map lacks
+never is; a slow person may not be either, and is then treated as a post)."""
+
 
 @dataclass
 class PersonTrack:
@@ -51,6 +55,7 @@ class PersonTrack:
     velocity: np.ndarray
     last_seen: float  # s
     hits: int = 1
+    walked: bool = False  # confirmed and once faster than WALKING m/s: a person, not a post
 
 
 class PeopleTracker:
@@ -137,6 +142,8 @@ class PeopleTracker:
                 if dt > 0:
                     track.velocity = track.velocity + self.beta / dt * residual
                 track.last_seen, track.hits = t, track.hits + 1
+                track.walked |= (track.hits >= self.confirm
+                                 and float(np.hypot(*track.velocity)) > WALKING)
         for k, track in enumerate(self.tracks):
             if k not in taken_tracks:
                 track.position = predicted[k]
@@ -147,11 +154,18 @@ class PeopleTracker:
         self.tracks = [tr for tr in self.tracks if t - tr.last_seen <= self.max_age]
         return self.tracks
 
-    def moving_discs(self) -> np.ndarray:
+    def walkers(self) -> np.ndarray:
+        """(W, 3): ``x, y, radius`` (m) of each live track that has walked (``WALKING``):
+        people, as against unmapped things that stand still."""
+        rows = [(*tr.position, self.person_radius) for tr in self.tracks if tr.walked]
+        return np.array(rows, dtype=float).reshape(-1, 3)
+
+    def moving_discs(self, walked_only: bool = False) -> np.ndarray:
         """(M, 5): each live track's ``x, y, vx, vy, radius`` (m, m/s); the velocity is
-        zero until the track is confirmed."""
+        zero until the track is confirmed. With ``walked_only``, only the tracks that
+        have walked (:meth:`walkers`): the others are posts, left to the costmap."""
         rows = [(*tr.position, *(tr.velocity if tr.hits >= self.confirm else (0.0, 0.0)),
-                 self.person_radius) for tr in self.tracks]
+                 self.person_radius) for tr in self.tracks if tr.walked or not walked_only]
         return np.array(rows, dtype=float).reshape(-1, 5)
 
 

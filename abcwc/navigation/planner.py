@@ -23,6 +23,10 @@ grids.
 
 :func:`smooth` then shortens the cell path by cutting corners where the straight line
 between two path cells crosses no costlier cells than the path itself did.
+
+:func:`costs_to_goal` runs the same moves from the goal until every cell is settled
+(Dijkstra, :func:`dijkstra_costs`): each cell's least cost to the goal, the measure the
+navigator's progress check reads, which does not change when the plan does.
 """
 
 from __future__ import annotations
@@ -167,6 +171,16 @@ def dijkstra_costs(weights: np.ndarray, source: int) -> np.ndarray:
     so this is also every cell's cost *to* ``source``."""
     best, _ = least_costs(weights, source, -1, 0.0)
     return best.reshape(weights.shape)
+
+
+def costs_to_goal(costmap: Costmap, goal: object, allow_unknown: bool = True) -> np.ndarray:
+    """(height, width) every cell's least path cost to ``goal`` (a map point) in free
+    floor metres (the cost over ``COST_NEUTRAL`` per cell, times the resolution: a
+    free straight metre counts 1); ``inf`` where no way leads."""
+    weights = cell_weights(costmap, allow_unknown=allow_unknown)
+    row, col = _endpoint(costmap, weights, goal, "goal")
+    costs = dijkstra_costs(weights, row * costmap.width + col)
+    return costs * (costmap.resolution / COST_NEUTRAL)
 
 
 def plan(costmap: Costmap, start: object, goal: object, **weight_options: object) -> Path:

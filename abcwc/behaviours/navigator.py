@@ -427,9 +427,7 @@ class Navigator(BehaviourBase):
                 return Twist(0.0, 0.0)
         if self.path is None:
             return Twist(0.0, 0.0)
-        ahead = self._path_ahead(pose)
-        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
-        pruned = ahead[along <= s.forward_prune_distance]
+        pruned = self._path_ahead(pose, within=s.forward_prune_distance)
         # people are those seen walking; a track that never walked is a thing the map
         # lacks (a door frame a self-made map drew short), and its returns are in the
         # local costmap as any obstacle's: kept out of, not given a person's berth
@@ -629,8 +627,8 @@ class Navigator(BehaviourBase):
             local.add_scan(scan, sensor, s.obstacle_range, s.raytrace_range)
         self._seen = local.cost == LETHAL  # what the scan marks, walls included
         seen = local.cost != NO_INFORMATION
-        local.cost = np.where(seen & (static == NO_INFORMATION), local.cost,
-                              np.maximum(np.where(seen, local.cost, FREE_SPACE), static))
+        known = np.where(static == NO_INFORMATION, FREE_SPACE, static)
+        local.cost = np.where(seen, np.maximum(local.cost, known), static)
         self._add_range_marks(frame, pose, local)
         local.inflate(self.footprint.inscribed_radius, s.inflation_radius,
                       s.cost_scaling_factor)
@@ -843,19 +841,23 @@ class Navigator(BehaviourBase):
         """The narrowest gap on the map the plan passes within ``gap_look_ahead`` m."""
         if self.path is None:
             return None
-        ahead = self._path_ahead(pose)
-        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
-        rows, cols = self.static_map.world_to_cell(ahead[along <= self.settings.gap_look_ahead])
+        ahead = self._path_ahead(pose, within=self.settings.gap_look_ahead)
+        rows, cols = self.static_map.world_to_cell(ahead)
         inside = self.static_map.contains(rows, cols)
         cells = np.column_stack([rows[inside], cols[inside]])
         gap = narrowest_gap(self.static_map, cells, self.settings.gap_width / 2)
         return gap if gap is not None and gap.width <= self.settings.gap_width else None
 
-    def _path_ahead(self, pose: Pose2D) -> np.ndarray:
-        """The plan from its point nearest the chair on, as points every resolution."""
+    def _path_ahead(self, pose: Pose2D, within: float = math.inf) -> np.ndarray:
+        """The plan from its point nearest the chair on, as points every resolution, up
+        to ``within`` m along it."""
         points = densify_polyline(self.path.points, self.settings.resolution)  # type: ignore[union-attr]
         nearest = int(np.argmin(np.hypot(points[:, 0] - pose.x, points[:, 1] - pose.y)))
-        return points[nearest:]
+        ahead = points[nearest:]
+        if math.isinf(within):
+            return ahead
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
+        return ahead[along <= within]
 
     def _distance_remaining(self, pose: Pose2D) -> float:
         if self.path is None:
@@ -987,9 +989,7 @@ class Navigator(BehaviourBase):
         s = self.settings
         way = np.array([[pose.x, pose.y]])
         if self.path is not None and len(self.path.points) > 1:
-            ahead = self._path_ahead(pose)
-            along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
-            way = np.vstack([way, ahead[along <= s.people_look_ahead]])
+            way = np.vstack([way, self._path_ahead(pose, within=s.people_look_ahead)])
         gaps = np.hypot(*(discs[:, None, :2] - way[None, :, :]).transpose(2, 0, 1))
         return bool((gaps.min(axis=1) - discs[:, 2] <= s.people_in_the_way).any())
 

@@ -80,9 +80,7 @@ def narrowest_gap(costmap: Costmap, cells: np.ndarray, below: float) -> Gap | No
     the one in the narrowest gap (:func:`gap_at`); None if no path cell is that near an
     obstacle, or none of those lies in a gap."""
     clearance = ndimage.distance_transform_edt(costmap.cost != LETHAL) * costmap.resolution
-    near = cells[clearance[cells[:, 0], cells[:, 1]] < below]
-    gaps = [gap_at(costmap, int(r), int(c)) for r, c in near]
-    gaps = [g for g in gaps if math.isfinite(g.width)]
+    gaps = gaps_along(costmap, cells, clearance, below)
     return min(gaps, key=lambda g: g.width) if gaps else None
 
 

@@ -18,9 +18,14 @@ writes ``course/NN_topic.ipynb`` from it, using nbgrader's markers:
   editable/deletable/jupyter flags; notebook metadata is just the python3 kernelspec.
   The JSON is written the way nbformat writes it, so a rebuild is byte-identical.
 
-``course/README.md`` is the front page (:mod:`abcwc.course_front_page`). Other files in
-``course/`` with no solution counterpart are removed. ``--check`` writes nothing
-and fails (exit code 1) when ``course/`` differs from what a build would write.
+``course/README.md`` is the front page (:mod:`abcwc.course_front_page`).
+``course/nbgrader/`` is the same chapters as an nbgrader course folder, for grading a
+class (:mod:`abcwc.course_nbgrader`): each chapter's source notebook there keeps the
+solution's blocks, for nbgrader to stub, and marks exercises, checks and read-only
+cells in nbgrader's cell metadata. Other files in ``course/`` and chapters in
+``course/nbgrader/source/`` with no solution counterpart are removed. ``--check``
+writes nothing and fails (exit code 1) when ``course/`` differs from what a build
+would write.
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ from typing import Any
 import nbformat
 from nbformat import NotebookNode
 
+from abcwc import course_nbgrader
 from abcwc.course_front_page import front_page
 from abcwc.paths import NotACheckoutError
 
@@ -44,6 +50,7 @@ __all__ = [
     "CourseBuildError",
     "apply",
     "build",
+    "nbgrader_source",
     "plan",
     "run",
     "student_notebook",
@@ -249,11 +256,9 @@ def _indent_width(line: str) -> int:
 # --- notebooks ------------------------------------------------------------------------
 
 
-def student_notebook(solution: NotebookNode, name: str) -> NotebookNode:
-    """Build the student version of a solution notebook (``name`` like ``"01_joystick"``)."""
-    nb = nbformat.v4.new_notebook()
-    nb.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": {"name": "python"}}
-    seen_ids: set[str] = set()
+def _kept_cells(solution: NotebookNode, name: str) -> list[tuple[int, str, str]]:
+    """The solution's cells a student notebook keeps: (index, source, student source)."""
+    kept = []
     for index, cell in enumerate(solution.cells):
         tags = cell.get("metadata", {}).get("tags", [])
         if HIDDEN_TAG in tags:
@@ -266,6 +271,17 @@ def student_notebook(solution: NotebookNode, name: str) -> NotebookNode:
             and f"### BEGIN {HIDDEN_TESTS}" in source
         ):
             continue  # the cell held nothing but hidden tests
+        kept.append((index, source, new_source))
+    return kept
+
+
+def student_notebook(solution: NotebookNode, name: str) -> NotebookNode:
+    """Build the student version of a solution notebook (``name`` like ``"01_joystick"``)."""
+    nb = nbformat.v4.new_notebook()
+    nb.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": {"name": "python"}}
+    seen_ids: set[str] = set()
+    for index, _, new_source in _kept_cells(solution, name):
+        cell = solution.cells[index]
         cell_id = _cell_id(cell, name, index, seen_ids)
         metadata = _student_metadata(cell.get("metadata", {}))
         if cell.cell_type == "code":
@@ -278,6 +294,32 @@ def student_notebook(solution: NotebookNode, name: str) -> NotebookNode:
             new = nbformat.v4.new_raw_cell(new_source, id=cell_id, metadata=metadata)
         nb.cells.append(new)
     return nb
+
+
+def nbgrader_source(solution: NotebookNode, name: str) -> NotebookNode:
+    """The chapter's nbgrader source notebook (:mod:`abcwc.course_nbgrader`): the student
+    notebook's cells with the solution's source and nbgrader's metadata."""
+    kept = _kept_cells(solution, name)
+    exercises = [_exercise(source, solution.cells[index].cell_type, name, index)
+                 for index, source, _ in kept]
+    try:
+        return course_nbgrader.nbgrader_notebook(
+            student_notebook(solution, name), [source for _, source, _ in kept], exercises)
+    except course_nbgrader.CheckCellError as exc:
+        raise CourseBuildError(name, str(exc), kept[exc.cell][0]) from None
+
+
+def _exercise(source: str, cell_type: str, notebook: str, cell: int) -> str | None:
+    """The exercise's name: the function around the cell's first solution block (a
+    written answer: ``answer_<cell index>``); ``None`` when the cell has no block."""
+    lines = source.split("\n")
+    for number, line in enumerate(lines, start=1):
+        match = _MARKER.match(line)
+        if match and match["edge"] == "BEGIN" and match["kind"] == SOLUTION:
+            if cell_type != "code":
+                return f"answer_{cell}"
+            return _enclosing_function(lines, number) or f"cell_{cell}"
+    return None
 
 
 def _student_metadata(metadata: dict[str, Any]) -> dict[str, Any]:
@@ -297,13 +339,16 @@ def _cell_id(cell: NotebookNode, name: str, index: int, seen: set[str]) -> str:
     return cell_id
 
 
-def render(solution_path: Path, solution: NotebookNode | None = None) -> str:
+def render(
+    solution_path: Path, solution: NotebookNode | None = None, *, nbgrader: bool = False
+) -> str:
     """The exact text of the student notebook built from ``solution_path`` (``solution``:
-    the notebook already read from it)."""
+    the notebook already read from it); with ``nbgrader``, of its nbgrader source."""
     if solution is None:
         solution = nbformat.read(solution_path, as_version=4)
+    form = nbgrader_source if nbgrader else student_notebook
     try:
-        nb = student_notebook(solution, solution_path.stem)
+        nb = form(solution, solution_path.stem)
     except CourseBuildError as exc:  # name the file rather than the chapter
         raise CourseBuildError(str(solution_path), exc.detail, exc.cell, exc.line) from None
     text = nbformat.writes(nb, version=4)
@@ -337,6 +382,11 @@ def plan(
         chapters[path.name] = nbformat.read(path, as_version=4)
         wanted[path.name] = render(path, chapters[path.name])
     wanted[FRONT_PAGE] = front_page(chapters)
+    for name, solution in chapters.items():
+        wanted[course_nbgrader.source_path(Path(name).stem)] = render(
+            source / name, solution, nbgrader=True)
+    wanted[f"{course_nbgrader.DIRECTORY}/nbgrader_config.py"] = course_nbgrader.CONFIG
+    wanted[f"{course_nbgrader.DIRECTORY}/.gitignore"] = course_nbgrader.GITIGNORE
 
     changes = []
     for name, text in wanted.items():
@@ -346,8 +396,10 @@ def plan(
         elif target.read_bytes() != text.encode("utf-8"):
             changes.append(Change(target, "out of date", text))
     if target_dir.is_dir():
-        for path in sorted(target_dir.iterdir()):
-            if path.is_file() and not path.name.startswith(".") and path.name not in wanted:
+        sources = target_dir / course_nbgrader.DIRECTORY / "source"
+        for path in sorted([*target_dir.iterdir(), *sources.glob("*/*.ipynb")]):
+            name = path.relative_to(target_dir).as_posix()
+            if path.is_file() and not path.name.startswith(".") and name not in wanted:
                 changes.append(Change(path, "no solution", None))
     return changes
 
@@ -357,6 +409,10 @@ def apply(changes: Sequence[Change]) -> None:
     for change in changes:
         if change.text is None:
             change.path.unlink()
+            folder = change.path.parent  # a chapter's folder in course/nbgrader/source?
+            if folder.parent.parts[-2:] == (course_nbgrader.DIRECTORY, "source") and not any(
+                    folder.iterdir()):
+                folder.rmdir()
         else:
             change.path.parent.mkdir(parents=True, exist_ok=True)
             with open(change.path, "w", encoding="utf-8", newline="\n") as f:

@@ -240,13 +240,20 @@ def course_tree(tmp_path: Path) -> tuple[Path, Path]:
 
 def test_build_writes_every_chapter_and_rebuild_is_byte_identical(course_tree):
     solutions, course = course_tree
-    assert build(solutions, course) == [course / "01_one.ipynb", course / "02_two.ipynb",
-                                        course / "README.md"]
-    before = {p.name: p.read_bytes() for p in course.iterdir()}
-    assert all(text.endswith(b"}\n") for name, text in before.items() if name.endswith("ipynb"))
+    assert build(solutions, course) == [
+        course / "01_one.ipynb",
+        course / "02_two.ipynb",
+        course / "README.md",
+        course / "nbgrader" / "source" / "01_one" / "01_one.ipynb",
+        course / "nbgrader" / "source" / "02_two" / "02_two.ipynb",
+        course / "nbgrader" / "nbgrader_config.py",
+        course / "nbgrader" / ".gitignore",
+    ]
+    before = {p: p.read_bytes() for p in course.rglob("*") if p.is_file()}
+    assert all(text.endswith(b"}\n") for path, text in before.items() if path.suffix == ".ipynb")
     assert build(solutions, course) == []
     assert build(solutions, course, check=True) == []
-    assert {p.name: p.read_bytes() for p in course.iterdir()} == before
+    assert {p: p.read_bytes() for p in course.rglob("*") if p.is_file()} == before
 
 
 def test_check_mode_reports_changed_missing_and_extra_files_and_writes_nothing(course_tree):
@@ -257,23 +264,44 @@ def test_check_mode_reports_changed_missing_and_extra_files_and_writes_nothing(c
     edited.write_text(edited.read_text().replace("YOUR CODE HERE", "my attempt"))
     (course / "99_orphan.ipynb").write_text("{}")
     (course / ".ipynb_checkpoints").mkdir()  # JupyterLab's own folder is left alone
-    snapshot = sorted(p.name for p in course.iterdir())
+    graded = course / "nbgrader"
+    (graded / "source" / "02_two" / "02_two.ipynb").write_text("{}")
+    (graded / "source" / "99_orphan").mkdir()
+    (graded / "source" / "99_orphan" / "99_orphan.ipynb").write_text("{}")
+    (graded / "release" / "01_one").mkdir(parents=True)  # nbgrader's own, left alone
+    (graded / "release" / "01_one" / "01_one.ipynb").write_text("{}")
+    (graded / "gradebook.db").write_text("")
+    snapshot = sorted(p.relative_to(course).as_posix() for p in course.rglob("*"))
 
     changes = plan(solutions, course)
-    assert [(c.path.name, c.reason) for c in changes] == [
+    assert [(c.path.relative_to(course).as_posix(), c.reason) for c in changes] == [
         ("01_one.ipynb", "out of date"),
         ("02_two.ipynb", "missing"),
+        ("nbgrader/source/02_two/02_two.ipynb", "out of date"),
         ("99_orphan.ipynb", "no solution"),
+        ("nbgrader/source/99_orphan/99_orphan.ipynb", "no solution"),
     ]
     assert build(solutions, course, check=True) == [c.path for c in changes]
-    assert sorted(p.name for p in course.iterdir()) == snapshot
+    assert sorted(p.relative_to(course).as_posix() for p in course.rglob("*")) == snapshot
 
     build(solutions, course)
-    assert sorted(p.name for p in course.iterdir()) == [
+    assert sorted(p.relative_to(course).as_posix() for p in course.rglob("*")) == [
         ".ipynb_checkpoints",
         "01_one.ipynb",
         "02_two.ipynb",
         "README.md",
+        "nbgrader",
+        "nbgrader/.gitignore",
+        "nbgrader/gradebook.db",
+        "nbgrader/nbgrader_config.py",
+        "nbgrader/release",
+        "nbgrader/release/01_one",
+        "nbgrader/release/01_one/01_one.ipynb",
+        "nbgrader/source",
+        "nbgrader/source/01_one",
+        "nbgrader/source/01_one/01_one.ipynb",
+        "nbgrader/source/02_two",
+        "nbgrader/source/02_two/02_two.ipynb",
     ]
     assert build(solutions, course, check=True) == []
 
@@ -309,6 +337,10 @@ def test_main_build_and_check_exit_codes_and_messages(course_tree, capsys):
         f"stale: {course / '01_one.ipynb'} (missing)",
         f"stale: {course / '02_two.ipynb'} (missing)",
         f"stale: {course / 'README.md'} (missing)",
+        f"stale: {course / 'nbgrader/source/01_one/01_one.ipynb'} (missing)",
+        f"stale: {course / 'nbgrader/source/02_two/02_two.ipynb'} (missing)",
+        f"stale: {course / 'nbgrader/nbgrader_config.py'} (missing)",
+        f"stale: {course / 'nbgrader/.gitignore'} (missing)",
         f"{course}/ is out of date: run `abcwc course build`",
     ]
     assert not course.exists()
@@ -359,7 +391,7 @@ def test_solution_notebooks_are_stored_run_top_to_bottom(path):
 NBVAL_INI = """\
 [pytest]
 addopts = -p abcwc.nbval_plugin --nbval --nbval-current-env --nbval-cell-timeout=120
-    -p no:cacheprovider
+    -p no:cacheprovider --ignore-glob=course/nbgrader/*
 testpaths = solutions course
 """
 

@@ -11,6 +11,13 @@ A check never raises: an unwritten exercise (the stub still raises
 "not yet", so an untouched student notebook runs to the end. Later cells then call
 :func:`use_or_fallback` to carry on with the library's own implementation.
 
+Under nbgrader a "not yet" must fail the cell, since nbgrader scores a test cell by
+whether it raised. nbgrader sets ``NBGRADER_EXECUTION`` (``autograde`` or ``validate``)
+while it runs a submission, and the nbgrader form of a chapter (``abcwc course build``,
+:mod:`abcwc.course_nbgrader`) ends each check cell with ``result.raise_for_nbgrader()``,
+which then raises :class:`NotYet` with the check's line; anywhere else it does nothing,
+so the notebook still runs to the end. The check's own line is shown first either way.
+
 The line is plain and deterministic, because the course's CI (nbval) compares the
 outputs stored in ``solutions/`` with a fresh run. In a notebook it is shown as rich
 output as well: a pass in green, a "not yet" in bold orange (:meth:`CheckResult.html`),
@@ -66,6 +73,8 @@ __all__ = [
 
 PASS = "✔ pass"
 NOT_YET = "… not yet"
+NBGRADER_EXECUTION = "NBGRADER_EXECUTION"
+"""The environment variable nbgrader sets while it runs a submission."""
 NOT_WRITTEN = "not written yet (the cell above still raises NotImplementedError)"
 _MAX_MESSAGE = 300
 
@@ -107,6 +116,14 @@ class CheckResult:
         return (f'<pre style="margin:0"><span style="color:{colour};font-weight:{weight}">'
                 f"{html.escape(status)}</span> — {html.escape(self.name)}: "
                 f"{html.escape(self.message)}</pre>")
+
+    def raise_for_nbgrader(self) -> None:
+        """Raise :class:`NotYet` with :attr:`line` if the check did not pass and nbgrader
+        is running the notebook (``NBGRADER_EXECUTION`` set: ``autograde`` or
+        ``validate``); elsewhere do nothing. nbgrader gives a test cell its points only
+        when the cell raises nothing."""
+        if not self.passed and os.environ.get(NBGRADER_EXECUTION):
+            raise NotYet(self.line)
 
     def _repr_html_(self) -> str:
         return self.html()

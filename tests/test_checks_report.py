@@ -333,6 +333,26 @@ def test_a_stub_of_an_earlier_exercise_is_named(capsys):
     assert "the cell above still raises" in capsys.readouterr().out
 
 
+def test_nbgraders_stub_of_an_earlier_exercise_is_named_by_its_function(capsys):
+    """nbgrader's stub raises NotImplementedError() with no message: the function it is
+    in names the exercise."""
+
+    def pot_from_joystick(joystick: int) -> int:
+        # YOUR CODE HERE
+        raise NotImplementedError()
+
+    def speed_command(joystick: int) -> int:
+        return pot_from_joystick(joystick) + 1
+
+    check("speed", pot_mapping, speed_command)
+    assert "this exercise calls pot_from_joystick(), an earlier exercise" in (
+        capsys.readouterr().out)
+    check("pot mapping", pot_mapping, pot_from_joystick)
+    assert capsys.readouterr().out == (
+        "… not yet — pot mapping: not written yet (the cell above still raises "
+        "NotImplementedError)\n")
+
+
 # --- the library's own, wrapped -------------------------------------------------------
 
 

@@ -248,15 +248,32 @@ def _is_library(filename: str) -> bool:
 def _not_written(exc: NotImplementedError, args: tuple) -> str:
     """What to say when a stub raised: :data:`NOT_WRITTEN` when it is the exercise being
     checked, else which other exercise's stub it called (``course build`` writes each
-    stub's message as ``"<function>: replace these lines with your code"``)."""
-    stub = str(exc).partition(": replace these lines")[0]
-    if not stub or stub == str(exc):
+    stub's message as ``"<function>: replace these lines with your code"``; nbgrader's own
+    stub, ``raise NotImplementedError()``, says nothing, and the student's function it
+    was raised in names it)."""
+    message = str(exc)
+    stub = message.partition(": replace these lines")[0]
+    if not message:
+        stub = _raised_in(exc)
+    elif stub == message:
+        return NOT_WRITTEN
+    if not stub:
         return NOT_WRITTEN
     checked = {getattr(a, "__name__", None) for a in args if callable(a)} - {None}
     if not checked or stub in checked:
         return NOT_WRITTEN
     return (f"not written yet: this exercise calls {stub}(), an earlier exercise that still "
             f"raises NotImplementedError; write {stub} first")
+
+
+def _raised_in(exc: BaseException) -> str:
+    """The name of the function ``exc`` was raised in, if that is the student's own."""
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    if tb is None or _is_library(tb.tb_frame.f_code.co_filename):
+        return ""
+    return tb.tb_frame.f_code.co_name
 
 
 def checker(name: str) -> Callable[[Callable[P, str | None]], Callable[P, CheckResult]]:

@@ -23,6 +23,7 @@ import pytest
 from abcwc.checks import NOT_YET, PASS, CheckResult, NotYet
 from abcwc.checks.report import NOT_WRITTEN
 from abcwc.course import CourseBuildError, build, nbgrader_source
+from abcwc.nbval_plugin import KERNEL_ENV
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = Path(__file__).resolve().parent / "data" / "notebooks"
@@ -131,13 +132,17 @@ def nbgrader(course: Path, env: dict[str, str], *args: str) -> str:
 
 @pytest.fixture
 def isolated_env(tmp_path: Path) -> dict[str, str]:
-    """nbgrader and its kernels with a home of their own: no user or Jupyter config."""
+    """nbgrader and its kernels with a home of their own (no user or Jupyter config), the
+    notebook tests' kernel settings, and no chair: a grader's machine has none, so the
+    chapter's real-chair cell says it is skipped."""
     home = tmp_path / "home"
     env = {key: value for key, value in os.environ.items()
-           if not key.startswith(("JUPYTER", "NBGRADER", "IPYTHON"))}
+           if not key.startswith(("JUPYTER", "NBGRADER", "IPYTHON", "ABCWC_"))}
+    env.update({key: value for key, value in KERNEL_ENV.items()
+                if value is not None and key != "ABCWC_PORT"})
     env.update(HOME=str(home), JUPYTER_CONFIG_DIR=str(home / ".jupyter"),
                JUPYTER_DATA_DIR=str(home / "data"), JUPYTER_RUNTIME_DIR=str(home / "runtime"),
-               IPYTHONDIR=str(home / ".ipython"), PYTHONPATH=str(ROOT),
+               IPYTHONDIR=str(home / ".ipython"),
                PATH=os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")]))
     return env
 

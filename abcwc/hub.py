@@ -4,13 +4,15 @@
 (npm ``configurable-http-proxy``, found on ``PATH``) on 127.0.0.1 at free ports, with
 JupyterHub's dummy authenticator (any name, no password) and its simple local-process
 spawner (every student's server a process of this machine's user, with a home folder of
-its own under the hub's folder holding a copy of ``course/``, as nbgitpuller would leave
-it). Its kernels get the test suite's kernel environment
+its own under the hub's folder). It serves the course as a git repository, ``abcwc``, made
+from this checkout's last commit. Its kernels get the test suite's kernel environment
 (:data:`abcwc.nbval_plugin.KERNEL_ENV`: this checkout on the path, ``ABCWC_PORT=simavr``
 where the firmware in the loop can run).
 
 :func:`run_student` is one student: log in through the hub's login form, ask the hub for
-an API token, start a server, read the chapter through the server's contents API, open a
+an API token, start a server, follow the chapter's nbgitpuller link
+(:func:`nbgitpuller_link`, the one the README gives instructors) and pull the course into
+their home as its page does, read the chapter through the server's contents API, open a
 session (a kernel) for it through the sessions API and run its code cells in order over
 the kernel's websocket (the Jupyter messaging protocol, as JupyterLab does). :func:`run_class`
 runs N students at once and samples each server's memory (the resident set of the server
@@ -34,14 +36,17 @@ import uuid
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from html.parser import HTMLParser
 from pathlib import Path
 from typing import Any
+from urllib.parse import unquote, urlencode
 
 from abcwc.nbval_plugin import KERNEL_ENV
 from abcwc.paths import checkout_root
 
-__all__ = ["CHAPTER", "ClassRun", "HubError", "LocalHub", "StudentRun", "proxy_command",
-           "run_class", "run_student"]
+__all__ = ["CHAPTER", "ClassRun", "HubError", "LocalHub", "StudentRun", "class_figures",
+           "class_table", "doubling_point", "nbgitpuller_link", "proxy_command", "run_class",
+           "run_student"]
 
 CHAPTER = "course/00_tour.ipynb"
 """The chapter a trial runs by default (the quickest that drives the chair: about 4 s alone
@@ -60,13 +65,39 @@ def proxy_command() -> str:
     """The path of ``configurable-http-proxy`` on ``PATH``.
 
     Raises:
-        HubError: it is not there (the message says how to install it).
+        FileNotFoundError: it is not there (the message says how to install it).
     """
     found = shutil.which("configurable-http-proxy")
     if found is None:
-        raise HubError("JupyterHub needs configurable-http-proxy on PATH: "
-                       "npm install -g configurable-http-proxy (Node.js 20 or newer)")
+        raise FileNotFoundError("JupyterHub needs configurable-http-proxy on PATH: "
+                                "npm install -g configurable-http-proxy (Node.js 20 or newer)")
     return found
+
+
+def nbgitpuller_link(hub: str, repository: str, chapter: str, branch: str = "main") -> str:
+    """The link that opens ``chapter`` (a path in the repository) for a student on the
+    JupyterHub at ``hub``: nbgitpuller pulls ``repository``'s ``branch`` into their home
+    (into a folder named as the repository's last path part, as nbgitpuller names it) and
+    opens the chapter in JupyterLab. nbgitpuller's link format:
+    https://nbgitpuller.readthedocs.io/en/latest/topic/url-options.html"""
+    folder = repository.rstrip("/").split("/")[-1]
+    query = urlencode({"repo": repository, "branch": branch,
+                       "urlpath": f"lab/tree/{folder}/{chapter}"})
+    return f"{hub.rstrip('/')}/hub/user-redirect/git-pull?{query}"
+
+
+def course_repository(checkout: Path, where: Path, branch: str = "main") -> Path:
+    """A git repository at ``where`` holding ``checkout``'s last commit (one commit deep)
+    on ``branch``: what the class pulls."""
+    if not (checkout / ".git").exists():
+        raise FileNotFoundError(f"{checkout} is not a git checkout: the hub serves the course "
+                                f"from the repository's last commit")
+    for command in (["git", "init", "-q", "-b", branch, str(where)],
+                    ["git", "-C", str(where), "fetch", "-q", "--depth", "1",
+                     f"file://{checkout}", "HEAD"],
+                    ["git", "-C", str(where), "checkout", "-q", "-B", branch, "FETCH_HEAD"]):
+        subprocess.run(command, check=True, capture_output=True, timeout=120)
+    return where
 
 
 def _free_port() -> int:
@@ -88,21 +119,19 @@ class LocalHub:
     stops it (and every process it started) at the end.
 
     Args:
-        folder: the hub's folder (its database, log, and every student's home); made if
-            missing.
-        course: the folder copied into every student's home as ``course/``.
+        folder: the hub's folder (its database, log, the course's repository and every
+            student's home); made if missing.
+        checkout: the git checkout whose last commit the class pulls (default: this one).
         start_timeout: seconds to wait for the hub, and for a student's server, to answer.
     """
 
-    def __init__(self, folder: str | Path, course: str | Path | None = None,
+    def __init__(self, folder: str | Path, checkout: str | Path | None = None,
                  start_timeout: float = 60.0) -> None:
         if start_timeout <= 0:
             raise ValueError(f"start_timeout must be positive seconds, got {start_timeout}")
         self.folder = Path(folder).resolve()
-        self.course = Path(course) if course is not None else checkout_root() / "course"
-        if not self.course.is_dir():
-            raise ValueError(f"no course folder at {self.course}: the hub's students need "
-                             f"a checkout's course/")
+        self.checkout = Path(checkout).resolve() if checkout is not None else checkout_root()
+        self.repository = self.folder / "abcwc"
         self.start_timeout = start_timeout
         self.url = ""
         self.process: subprocess.Popen | None = None
@@ -157,6 +186,7 @@ class LocalHub:
         if self.process is not None:
             raise HubError("this hub is already started")
         self.folder.mkdir(parents=True, exist_ok=True)
+        course_repository(self.checkout, self.repository)
         port, hub_port, api_port = _free_port(), _free_port(), _free_port()
         config = self.folder / "jupyterhub_config.py"
         config.write_text(self._config(port, hub_port, api_port), encoding="utf-8")
@@ -266,12 +296,15 @@ class LocalHub:
                                f"after it was stopped")
             time.sleep(0.2)
 
-    def add_student_home(self, student: str) -> Path:
-        """A student's home with a fresh copy of the course (what nbgitpuller leaves)."""
-        home = self.home(student)
-        if not home.exists():
-            shutil.copytree(self.course, home / "course")
-        return home
+    def check_chapter(self, chapter: str) -> None:
+        """Refuse a chapter that is not a notebook of the course a student's home holds."""
+        path = Path(chapter)
+        course = self.checkout / "course"
+        if (path.parts[:1] != ("course",) or path.suffix != ".ipynb"
+                or not (self.checkout / path).is_file()):
+            names = ", ".join(f"course/{p.name}" for p in sorted(course.glob("*.ipynb")))
+            raise ValueError(f"no chapter {chapter!r} in the students' course folder; "
+                             f"one of: {names}")
 
     def __enter__(self) -> LocalHub:
         return self.start()
@@ -375,6 +408,7 @@ class StudentRun:
 
     Attributes:
         student: the name they logged in with.
+        chapter: the notebook run, its path in the student's home (where nbgitpuller put it).
         start_seconds: wall seconds from asking the hub for a server to its being ready.
         chapter_seconds: wall seconds from opening the chapter's session to the last cell's
             reply (the kernel's start included).
@@ -387,6 +421,7 @@ class StudentRun:
     """
 
     student: str
+    chapter: str
     start_seconds: float
     chapter_seconds: float
     cells: int
@@ -401,13 +436,57 @@ def _check(response: Any, expected: Sequence[int], what: str) -> Any:
     return response
 
 
+class _PullPage(HTMLParser):
+    """The ``data-`` attributes of nbgitpuller's page (what its script pulls, and where it
+    then sends the student)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.data: dict[str, str] = {}
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        for name, value in attrs:
+            if name.startswith("data-") and value is not None:
+                self.data[name[5:]] = unquote(value)
+
+
+def _pull(api: Any, server: str, link: str, web: Any, timeout: float) -> str:
+    """Follow an nbgitpuller ``link`` as the student's browser (the hub sends it on to
+    their server), then pull as the page's script does, through the server's
+    ``git-pull/api`` event stream; return the chapter's path the page then opens."""
+    page = _check(web.get(link, timeout=HTTP_TIMEOUT), [200], "the nbgitpuller link")
+    if not page.url.startswith(f"{server}/git-pull"):
+        raise HubError(f"the nbgitpuller link ended at {page.url}, not the server's git-pull")
+    parser = _PullPage()
+    parser.feed(page.text)
+    wanted = {key: parser.data[key] for key in ("repo", "branch", "targetpath")
+              if key in parser.data}
+    deadline = time.monotonic() + timeout
+    with api.get(f"{server}/git-pull/api", params=wanted, stream=True,
+                 timeout=HTTP_TIMEOUT) as events:
+        _check(events, [200], "the pull")
+        for line in events.iter_lines(decode_unicode=True):
+            if time.monotonic() > deadline:
+                raise HubError(f"the pull took more than {timeout:.0f} s")
+            if not line or not line.startswith("data:"):
+                continue
+            event = json.loads(line[5:])
+            if event.get("phase") == "error":
+                raise HubError(f"the pull failed: {event.get('message')}")
+            if event.get("phase") == "finished":
+                break
+        else:
+            raise HubError("the pull's event stream ended before it finished")
+    return parser.data["path"].removeprefix("lab/tree/")
+
+
 def run_student(hub: LocalHub, student: str, chapter: str = CHAPTER,
                 cell_timeout: float = 120.0) -> StudentRun:
-    """One student logs in, starts a server and runs ``chapter`` (a path under their home)
-    cell by cell. See the module's docstring for the steps."""
+    """One student logs in, starts a server, pulls the course by the chapter's
+    nbgitpuller link and runs ``chapter`` (a path in the repository) cell by cell. See the
+    module's docstring for the steps."""
     import requests
 
-    hub.add_student_home(student)
     web = requests.Session()
     # log in through the form, as a browser does (the form carries the _xsrf cookie)
     _check(web.get(f"{hub.url}/hub/login", timeout=HTTP_TIMEOUT), [200], "the login page")
@@ -439,6 +518,8 @@ def run_student(hub: LocalHub, student: str, chapter: str = CHAPTER,
     start_seconds = time.monotonic() - began
 
     server = f"{hub.url}/user/{student}"
+    link = nbgitpuller_link(hub.url, f"file://{hub.repository}", chapter)
+    chapter = _pull(api, server, link, web, hub.start_timeout)
     began = time.monotonic()
     notebook = _check(api.get(f"{server}/api/contents/{chapter}", params={"content": 1},
                               timeout=HTTP_TIMEOUT), [200], f"{student}'s chapter").json()
@@ -463,7 +544,7 @@ def run_student(hub: LocalHub, student: str, chapter: str = CHAPTER,
                                 cell_timeout)
     finally:
         channel.close()
-    return StudentRun(student, start_seconds, chapter_seconds, len(code_cells),
+    return StudentRun(student, chapter, start_seconds, chapter_seconds, len(code_cells),
                       tuple(errors), probe.stdout.strip())
 
 
@@ -516,6 +597,7 @@ def run_class(hub: LocalHub, students: int, chapter: str = CHAPTER, prefix: str 
     their servers are stopped at the end (so the next class starts from none)."""
     if students < 1:
         raise ValueError(f"students must be 1 or more, got {students}")
+    hub.check_chapter(chapter)
     names = [f"{prefix}{k + 1}" for k in range(students)]
     began = time.monotonic()
     with _MemorySampler(hub) as sampler, ThreadPoolExecutor(students) as pool:
@@ -531,3 +613,59 @@ def run_class(hub: LocalHub, students: int, chapter: str = CHAPTER, prefix: str 
     return ClassRun(with_memory, wall)
 
 
+
+
+def doubling_point(classes: dict[int, ClassRun]) -> int | None:
+    """The smallest class size whose mean chapter time is at least twice the smallest
+    class's (``None``: no class measured was that slow)."""
+    if not classes:
+        raise ValueError("no classes measured")
+    sizes = sorted(classes)
+    base = _mean([run.chapter_seconds for run in classes[sizes[0]].students])
+    for size in sizes[1:]:
+        if _mean([run.chapter_seconds for run in classes[size].students]) >= 2 * base:
+            return size
+    return None
+
+
+def _mean(values: Sequence[float]) -> float:
+    return sum(values) / len(values)
+
+
+def class_figures(classes: dict[int, ClassRun]) -> list[dict[str, float | int]]:
+    """Per class size: wall seconds per student's chapter (mean, max) and its ratio to
+    the smallest class's mean, seconds to a ready server (mean), each server's peak
+    resident memory (MB; mean, max), the whole class's wall seconds and the cells that
+    failed."""
+    sizes = sorted(classes)
+    base = _mean([run.chapter_seconds for run in classes[sizes[0]].students])
+    rows = []
+    for size in sizes:
+        runs = classes[size].students
+        chapter = [run.chapter_seconds for run in runs]
+        memory = [run.peak_memory_mb for run in runs]
+        rows.append({
+            "students": size, "chapter_mean_s": _mean(chapter), "chapter_max_s": max(chapter),
+            "slowdown": _mean(chapter) / base,
+            "server_start_mean_s": _mean([run.start_seconds for run in runs]),
+            "memory_mean_mb": _mean(memory), "memory_max_mb": max(memory),
+            "class_wall_s": classes[size].wall_seconds,
+            "failed_cells": sum(len(run.errors) for run in runs)})
+    return rows
+
+
+def class_table(classes: dict[int, ClassRun], chapter: str = CHAPTER) -> str:
+    """:func:`class_figures` as a text table, with the doubling point under it."""
+    lines = [f"{chapter}, each student on a server of their own, all at once",
+             "students  chapter s (mean  max)  x N=1  server start s  memory MB (mean  max)"
+             "  class s  failed cells"]
+    for row in class_figures(classes):
+        lines.append(
+            f"{row['students']:8d}  {row['chapter_mean_s']:16.1f} {row['chapter_max_s']:5.1f}"
+            f"  {row['slowdown']:5.2f}  {row['server_start_mean_s']:14.1f}"
+            f"  {row['memory_mean_mb']:16.0f} {row['memory_max_mb']:5.0f}"
+            f"  {row['class_wall_s']:7.1f}  {row['failed_cells']:12d}")
+    double = doubling_point(classes)
+    lines.append("a chapter's time doubles at "
+                 + (f"{double} students" if double else "none of these class sizes"))
+    return "\n".join(lines)

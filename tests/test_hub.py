@@ -1,7 +1,8 @@
 """A class on a real JupyterHub: JupyterHub from PyPI with configurable-http-proxy from npm
 on 127.0.0.1, the dummy authenticator and local-process servers. Two students log in at
-once, each starts a server and runs chapter 00 through it (contents, sessions and the
-kernel's websocket), every cell without an error, in a kernel of their own server; at the
+once, each starts a server, pulls the course by chapter 00's nbgitpuller link and runs the
+chapter through the server (contents, sessions and the kernel's websocket), every cell
+without an error, in a kernel of their own server; at the
 end the hub and every process it started are gone. Without jupyterhub or the proxy the
 test is skipped, and under CI (``CI=true``) it fails instead. ``abcwc hubtrial`` runs
 larger classes and prints their times and memory."""
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import subprocess
 
 import nbformat
 import psutil
@@ -26,6 +28,10 @@ def _missing() -> str | None:
         import jupyterhub  # noqa: F401
     except ImportError:
         return "jupyterhub is not installed: pip install -e '.[test]'"
+    try:
+        import nbgitpuller  # noqa: F401
+    except ImportError:
+        return "nbgitpuller is not installed: pip install -e '.[test]'"
     if shutil.which("configurable-http-proxy") is None:
         return "configurable-http-proxy is not on PATH: npm install -g configurable-http-proxy"
     return None
@@ -59,6 +65,12 @@ def test_students_run_a_chapter_each_on_their_own_server(tmp_path):
     for run in result.students:
         assert run.errors == (), f"{run.student}'s chapter failed: {run.errors}"
         assert run.cells == code_cells
+        # nbgitpuller put the committed chapter into the student's home
+        pulled = hub.home(run.student) / run.chapter
+        assert run.chapter == f"abcwc/{CHAPTER}"
+        assert pulled.read_bytes() == subprocess.run(
+            ["git", "show", f"HEAD:{CHAPTER}"], cwd=checkout_root(), capture_output=True,
+            check=True).stdout
         assert run.kernel_user == run.student
         # a server with its kernel holds numpy, matplotlib and the simulator: well over
         # 100 MB resident, and no server of this sort reaches 4 GB

@@ -322,6 +322,18 @@ class CellResult:
     error: str | None
 
 
+def _decode(frame: str | bytes) -> dict:
+    """A kernel message from a websocket frame: JSON text, or jupyter_server's binary
+    form for a message with buffers (a widget's, say): the count n of parts as a
+    big-endian uint32, n uint32 offsets, then the JSON message and its buffers."""
+    if isinstance(frame, str):
+        return json.loads(frame)
+    parts = int.from_bytes(frame[:4], "big")
+    offsets = [int.from_bytes(frame[4 + 4 * k:8 + 4 * k], "big") for k in range(parts)]
+    end = offsets[1] if parts > 1 else len(frame)
+    return json.loads(frame[offsets[0]:end].decode("utf-8"))
+
+
 class KernelChannel:
     """A kernel's websocket (``/api/kernels/<id>/channels``), spoken in the Jupyter
     messaging protocol's JSON form: one execute request at a time, its reply and the
@@ -360,7 +372,7 @@ class KernelChannel:
                 raise HubError(f"no answer from the kernel within {timeout:.0f} s")
             self.socket.settimeout(left)
             try:
-                msg = json.loads(self.socket.recv())
+                msg = _decode(self.socket.recv())
             except websocket.WebSocketTimeoutException:
                 continue
             if msg.get("parent_header", {}).get("msg_id") != msg_id:

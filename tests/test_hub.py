@@ -76,3 +76,33 @@ def test_students_run_a_chapter_each_on_their_own_server(tmp_path):
         # 100 MB resident, and no server of this sort reaches 4 GB
         assert 100 < run.peak_memory_mb < 4096
         assert 0 < run.chapter_seconds < result.wall_seconds
+
+
+def test_the_readmes_nbgitpuller_link_opens_a_course_chapter():
+    from urllib.parse import parse_qs, urlsplit
+
+    from abcwc.hub import nbgitpuller_link
+
+    readme = (checkout_root() / "README.md").read_text(encoding="utf-8")
+    link = readme.split("<!-- nbgitpuller-link -->", 1)[1].split("```")[1].strip()
+    link = link.removeprefix("text").strip()
+    parts = urlsplit(link)
+    assert parts.path == "/hub/user-redirect/git-pull"
+    query = {key: values[0] for key, values in parse_qs(parts.query).items()}
+    folder = query["repo"].rstrip("/").split("/")[-1]  # where nbgitpuller clones it
+    tree, _, chapter = query["urlpath"].partition(f"/{folder}/")
+    assert tree == "lab/tree"
+    assert chapter.startswith("course/") and (checkout_root() / chapter).is_file()
+    assert link == nbgitpuller_link(f"{parts.scheme}://{parts.netloc}", query["repo"], chapter,
+                                    query["branch"])
+
+
+@pytest.mark.parametrize("buffers", [[], [b"abc"], [b"abc", b"\x00\xff\x01"]])
+def test_a_binary_kernel_frame_reads_as_the_server_wrote_it(buffers):
+    from jupyter_server.services.kernels.connection.base import serialize_binary_message
+
+    from abcwc.hub import _decode
+
+    msg = {"header": {"msg_id": "m1", "msg_type": "comm_msg"}, "parent_header": {},
+           "metadata": {}, "content": {"data": {"value": "é"}}, "channel": "iopub"}
+    assert _decode(serialize_binary_message({**msg, "buffers": buffers})) == msg

@@ -42,7 +42,7 @@ from typing import Any
 from urllib.parse import unquote, urlencode
 
 from abcwc.nbval_plugin import KERNEL_ENV
-from abcwc.paths import checkout_root
+from abcwc.paths import require_checkout
 
 __all__ = ["CHAPTER", "ClassRun", "HubError", "LocalHub", "StudentRun", "class_figures",
            "class_table", "doubling_point", "nbgitpuller_link", "proxy_command", "run_class",
@@ -130,7 +130,8 @@ class LocalHub:
         if start_timeout <= 0:
             raise ValueError(f"start_timeout must be positive seconds, got {start_timeout}")
         self.folder = Path(folder).resolve()
-        self.checkout = Path(checkout).resolve() if checkout is not None else checkout_root()
+        self.checkout = (Path(checkout).resolve() if checkout is not None
+                         else require_checkout("a class on a JupyterHub"))
         self.repository = self.folder / "abcwc"
         self.start_timeout = start_timeout
         self.url = ""

@@ -106,3 +106,64 @@ def test_a_binary_kernel_frame_reads_as_the_server_wrote_it(buffers):
     msg = {"header": {"msg_id": "m1", "msg_type": "comm_msg"}, "parent_header": {},
            "metadata": {}, "content": {"data": {"value": "é"}}, "channel": "iopub"}
     assert _decode(serialize_binary_message({**msg, "buffers": buffers})) == msg
+
+
+def _class(chapter_seconds: list[float], memory_mb: float = 400.0):
+    from abcwc.hub import ClassRun, StudentRun
+
+    return ClassRun(tuple(StudentRun(f"s{k}", "abcwc/course/00_tour.ipynb", 2.0, seconds, 20,
+                                     (), f"s{k}", memory_mb)
+                          for k, seconds in enumerate(chapter_seconds)),
+                    wall_seconds=max(chapter_seconds) + 3.0)
+
+
+def test_the_doubling_point_is_the_first_class_twice_as_slow_as_the_smallest():
+    from abcwc.hub import class_figures, doubling_point
+
+    classes = {1: _class([4.0]), 2: _class([4.0, 5.0]), 4: _class([7.0, 8.9]),
+               8: _class([16.0] * 8)}
+    # means 4.0, 4.5, 7.95 (1.99 times: not yet double) and 16.0
+    assert doubling_point(classes) == 8
+    assert doubling_point({k: classes[k] for k in (1, 2, 4)}) is None
+    rows = class_figures(classes)
+    assert [row["students"] for row in rows] == [1, 2, 4, 8]
+    assert rows[2]["slowdown"] == pytest.approx(7.95 / 4.0)
+    assert rows[1]["chapter_max_s"] == 5.0 and rows[3]["memory_max_mb"] == 400.0
+    with pytest.raises(ValueError, match="no classes measured"):
+        doubling_point({})
+
+
+def test_hubtrial_prints_each_class_and_the_doubling_point(monkeypatch, capsys):
+    import json
+
+    from abcwc import hub
+    from abcwc.cli import main
+
+    started = []
+
+    class FakeHub:
+        def __init__(self, folder):
+            self.folder = folder
+
+        def check_chapter(self, chapter):
+            started.append(chapter)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            pass
+
+    times = {1: [4.0], 2: [4.2, 4.4], 4: [8.0, 8.4, 8.2, 8.6]}
+    monkeypatch.setattr(hub, "LocalHub", FakeHub)
+    monkeypatch.setattr(hub, "run_class", lambda running, size, chapter, prefix:
+                        _class(times[size], memory_mb=426.0))
+    assert main(["hubtrial", "--students", "4,1,2", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "a chapter's time doubles at 4 students" in text
+    assert main(["hubtrial", "--students", "1,2", "--json", "--quiet"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    assert [row["students"] for row in figures["classes"]] == [1, 2]
+    assert figures["doubling_students"] is None
+    assert figures["classes"][1]["chapter_mean_s"] == pytest.approx(4.3)
+    assert started == ["course/00_tour.ipynb"] * 2

@@ -1,11 +1,12 @@
 """The abcwc command: demo, bench, posegraph, slam, navtrial, followtrial, errands,
-dashboard and course build.
+hubtrial, dashboard and course build.
 
 Every command takes the same few options:
 
 - ``--quiet``: no progress bars (they are on by default and go to stderr);
 - ``--json``: the figures as one JSON object on stdout instead of text (every command
-  that prints figures: demo, bench, posegraph, slam, navtrial, followtrial, errands);
+  that prints figures: demo, bench, posegraph, slam, navtrial, followtrial, errands,
+  hubtrial);
 - ``--out DIR``: a folder, created when the command writes into it (demo, posegraph, slam);
 - ``--debug``: an error shows its traceback.
 
@@ -308,6 +309,43 @@ def _errands(args: argparse.Namespace) -> int:
     return 0
 
 
+def _hubtrial(args: argparse.Namespace) -> int:
+    """Classes of N students at once on a JupyterHub on this machine, each running a
+    chapter on a server of their own: time per chapter and memory per server."""
+    import tempfile
+
+    from abcwc.hub import LocalHub, class_figures, class_table, doubling_point, run_class
+
+    try:
+        sizes = sorted({int(part) for part in args.students.split(",")})
+    except ValueError:
+        raise ValueError(f"--students takes class sizes separated by commas (1,2,4,8), "
+                         f"got {args.students!r}") from None
+    if not sizes or sizes[0] < 1:
+        raise ValueError(f"--students: every class size must be 1 or more, got {args.students}")
+    try:
+        import jupyterhub  # noqa: F401
+    except ImportError:
+        raise FileNotFoundError("abcwc hubtrial needs jupyterhub: pip install -e '.[test]'") \
+            from None
+    classes = {}
+    with tempfile.TemporaryDirectory(prefix="abcwc-hub-") as folder:
+        hub = LocalHub(folder)
+        hub.check_chapter(args.chapter)
+        with hub:
+            for size in sizes:
+                classes[size] = run_class(hub, size, args.chapter,
+                                          prefix=f"n{size}-student")
+                if not args.quiet:
+                    print(f"{size} students: done", file=sys.stderr)
+    if args.json:
+        _print_json({"chapter": args.chapter, "classes": class_figures(classes),
+                     "doubling_students": doubling_point(classes)})
+    else:
+        print(class_table(classes, args.chapter))
+    return 0
+
+
 def _dashboard(args: argparse.Namespace) -> int:
     """Serve the rider's dashboard on the simulated chair as a page of its own (Voila),
     in the foreground until Ctrl-C."""
@@ -471,6 +509,17 @@ def build_parser() -> argparse.ArgumentParser:
     errands.add_argument("--world", default="floor", help="a world's name or a .json file")
     _json_option(errands)
     errands.set_defaults(run=_errands)
+
+    hubtrial = commands.add_parser(
+        "hubtrial", parents=common,
+        help="classes of N students at once on a JupyterHub on this machine: time per "
+             "chapter and memory per server")
+    hubtrial.add_argument("--students", default="1,2,4,8",
+                          help="class sizes, separated by commas (default: 1,2,4,8)")
+    hubtrial.add_argument("--chapter", default="course/00_tour.ipynb",
+                          help="the notebook each student runs (default: course/00_tour.ipynb)")
+    _json_option(hubtrial)
+    hubtrial.set_defaults(run=_hubtrial)
 
     dashboard = commands.add_parser(
         "dashboard", help="serve the rider's dashboard on the simulated chair as a page "

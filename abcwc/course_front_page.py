@@ -68,7 +68,11 @@ START_HERE = """\
 ## Start here
 
 1. **Install.** In the repository's top folder (Python 3.10 or newer):
-   `pip install -e .` installs the library `abcwc` and JupyterLab.
+   `pip install -e .` installs the library `abcwc` and JupyterLab. On your class's
+   JupyterHub or on Binder there is nothing to install: the link your instructor gives
+   you opens a chapter in JupyterLab, in a copy of the course of your own (the
+   repository's `README.md`, "Running the course on a JupyterHub", says how such a link
+   is made).
 2. **Open JupyterLab** there: `jupyter lab`, then open `course/` in the file browser on
    the left and start with `00_tour.ipynb`. Run the cells from the top (Shift+Enter).
 3. **Exercises, checks and the fallback.** An exercise is a function with a gap marked

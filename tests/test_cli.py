@@ -93,7 +93,7 @@ def test_version_is_the_packages():
 def test_every_command_takes_quiet_and_debug_and_the_figures_ones_json():
     minimal = {"demo": [], "bench": [], "course build": [], "posegraph": ["g.g2o"],
                "slam": ["log.clf"], "navtrial": [], "followtrial": [], "errands": [],
-               "dashboard": []}
+               "hubtrial": [], "dashboard": []}
     parser = build_parser()
     for command, needed in minimal.items():
         args = parser.parse_args([*command.split(), *needed, "--quiet", "--debug"])
@@ -319,6 +319,13 @@ USER_ERRORS = {
                                     "unknown world 'moon'"),
     "navtrial in an unknown world": (["navtrial", "--world", "moon"], {},
                                      "unknown world 'moon'"),
+    "a class of none": (["hubtrial", "--students", "0,2"], {},
+                        "--students: every class size must be 1 or more"),
+    "class sizes not numbers": (["hubtrial", "--students", "a,b"], {},
+                                "--students takes class sizes separated by commas"),
+    "a chapter not in the course": (["hubtrial", "--chapter", "solutions/00_tour.ipynb"], {},
+                                    "no chapter 'solutions/00_tour.ipynb' in the students' "
+                                    "course folder; one of: course/00_tour.ipynb"),
 }
 
 

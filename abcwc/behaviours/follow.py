@@ -163,6 +163,9 @@ class FollowSettings:
     settle: int = 3  # decisions the way must stay clear (or not) to change the aim
     lookahead: float = 0.5  # m from the axle to the point on the trail steered for
     trail_spacing: float = 0.1  # m between the trail's points
+    door_width: float = 1.2  # m: a gap on her trail narrower than this is a door
+    door_approach: float = 0.8  # m before a door's middle from which the chair is on its axis
+    door_speed: float = 0.4  # m/s at most in door mode
     patience: float = 1.0  # s blocked before backing off
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.2  # m/s
@@ -203,7 +206,8 @@ class TagFollower(BehaviourBase):
         for name in ("distance", "k_gap", "k_turn", "max_speed", "max_turn_rate",
                      "lost_after", "predict_for", "search_turn_rate", "local_size", "seek_for",
                      "braking", "lookahead", "trail_spacing", "patience",
-                     "back_off_distance", "back_off_speed"):
+                     "back_off_distance", "back_off_speed", "door_width", "door_approach",
+                     "door_speed"):
             value = getattr(s, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
@@ -235,6 +239,7 @@ class TagFollower(BehaviourBase):
         self._blocked_since: float | None = None
         self._scan_points: np.ndarray | None = None  # the newest scan's returns (odom)
         self._on_trail = False  # steering along her trail (not straight at her)
+        self.door: tuple[np.ndarray, np.ndarray] | None = None  # (middle, axis) lined up for
         self._unsettled = 0  # decisions running the way's state has disagreed with that
         self._first_seen: dict[int, np.ndarray] = {}  # others' tracks: where first seen
         self._backing: tuple[float, Pose2D] | None = None  # (since, from) while backing off
@@ -424,7 +429,10 @@ class TagFollower(BehaviourBase):
         camera = self._camera()
         target = np.asarray(target, dtype=float)
         carrot, along = self._carrot(target)
-        if carrot is target:  # in plain view: the line of sight, as ever
+        if self.door is not None:  # door mode: along its axis, slowly
+            origin = (self.pose.x, self.pose.y, self.pose.theta)
+            cap = s.door_speed
+        elif carrot is target:  # in plain view: the line of sight, as ever
             origin = (camera.x, camera.y, camera.theta)
             cap = math.inf
         else:
@@ -464,8 +472,18 @@ class TagFollower(BehaviourBase):
                 self._on_trail, self._unsettled = not self._on_trail, 0
         else:
             self._unsettled = 0
+        self.door = None
         if not self._on_trail:
             return target, straight
+        door = self._door_ahead(pivot, ahead)
+        if door is not None:
+            self.door = door
+            middle, axis = door
+            at = float((pivot - middle) @ axis)  # m along the axis (negative: before it)
+            goal = middle + min(max(at + self.settings.lookahead,
+                                    -self.settings.door_approach),
+                                self.settings.door_approach) * axis
+            return goal, self.trail.length_from((float(pivot[0]), float(pivot[1])), to=target)
         if clear.all():  # on the trail a moment longer: pure pursuit along it
             at = (float(pivot[0]), float(pivot[1]))
             off = float(math.hypot(*(ahead[0] - pivot)))
@@ -480,6 +498,61 @@ class TagFollower(BehaviourBase):
             k = max(k, int(np.argmax(far)))
         steps = float(np.hypot(*np.diff(ahead[k:], axis=0).T).sum())
         return ahead[k], float(math.hypot(*(ahead[k] - pivot))) + steps
+
+    def _door_ahead(self, pivot: np.ndarray, ahead: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """Door mode (the navigator's, :meth:`~abcwc.behaviours.navigator.Navigator.
+        _through_doors`, on the scan): the first gap narrower than ``door_width`` that
+        the trail ``ahead`` (odom, m, from the point nearest the axle ``pivot``) goes
+        through within reach, as ``(middle, axis)``: the middle between the two nearest
+        returns either side of the trail there (within 0.3 m along it), and the unit way
+        through, at right angles to the line between them; None where there is none,
+        where the chair is not yet within ``door_approach + lookahead`` m of it, or once its axle is
+        ``lookahead`` m past the middle. Pure pursuit on that axis lines the chair up
+        before it enters, as a person pushing a wheelchair does, where aiming at the
+        farthest point in view beyond the door would take the frame's corner."""
+        s = self.settings
+        if self._scan_points is None or len(ahead) < 2:
+            return None
+        reach = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
+        path = ahead[reach <= s.door_approach + 2 * s.lookahead + 0.5]
+        if len(path) < 2:
+            return None
+        tangent = np.gradient(path, axis=0)
+        tangent /= np.maximum(np.hypot(*tangent.T), 1e-9)[:, None]
+        points = self._scan_points
+        if self.track is not None:  # her own returns (she may stand in the door)
+            points = points[np.hypot(*(points - self.track).T) > s.person_radius + 0.1]
+        near = np.hypot(*(points - pivot).T) <= reach[len(path) - 1] + s.door_width
+        points = points[near]
+        if not len(points):
+            return None
+        rel = points[None, :, :] - path[:, None, :]  # (K, P, 2)
+        along = (rel * tangent[:, None, :]).sum(axis=2)
+        across = rel[..., 1] * tangent[:, None, 0] - rel[..., 0] * tangent[:, None, 1]
+        beside = np.abs(along) < 0.3  # the nearest return each side, not ahead or behind
+        distance = np.hypot(along, across)
+        left = np.where(beside & (across > 0), distance, np.inf)
+        right = np.where(beside & (across < 0), distance, np.inf)
+        width = left.min(axis=1) + right.min(axis=1)
+        doors = np.flatnonzero(width < s.door_width)
+        if not len(doors):
+            return None
+        run = doors[:np.argmax(np.diff(np.append(doors, doors[-1] + 2)) > 1) + 1]
+        k = int(run[np.argmin(width[run])])
+        left_end = points[int(np.argmin(left[k]))]
+        right_end = points[int(np.argmin(right[k]))]
+        middle = (left_end + right_end) / 2
+        across_line = left_end - right_end
+        axis = np.array([-across_line[1], across_line[0]]) / max(
+            float(np.hypot(*across_line)), 1e-9)
+        if axis @ tangent[k] < 0:
+            axis = -axis
+        at = float((pivot - middle) @ axis)
+        if at > s.lookahead or math.hypot(*(pivot - middle)) > (s.door_approach
+                                                                  + s.lookahead):
+            return None
+        return middle, axis
 
     def _clear_ways(self, start: np.ndarray, ends: np.ndarray) -> np.ndarray:
         """(K,) whether the straight way from ``start`` to each of ``ends`` (odom, m)

@@ -12,7 +12,9 @@ from abcwc.behaviours.follow_identity import IdentityGate
 from abcwc.estimation.gyro import GyroOdometry
 from abcwc.experiments.follow_trial import run_follow_trial
 from abcwc.geometry import compose
+from abcwc.params import default_params
 from abcwc.paths import data_dir
+from abcwc.perception.tags import FollowCard
 from abcwc.sim import SimBase
 from abcwc.sim.world import world_from_dict
 
@@ -175,3 +177,36 @@ def test_the_identity_gate_refuses_a_jump_to_a_passer_by():
                                                                               "none near")
     with pytest.raises(ValueError, match="max_speed"):
         IdentityGate(max_speed=0.0)
+
+
+def _turns_back_while(velocities: list[tuple[float, float]]) -> list[bool]:
+    """A follower fed lidar-only updates every 0.1 s of a blob moving at each of
+    ``velocities`` (m/s) in turn, as :meth:`TagFollower.update` feeds them: whether it
+    judged the track to have turned back, at each update."""
+    params = default_params()
+    follower = TagFollower(FollowCard("ana", 7), GyroOdometry(params=params), params)
+    t, point = 0.0, np.array([5.0, 1.0])
+    follower.track, follower.velocity = point.copy(), np.array(velocities[0], dtype=float)
+    follower._predict(t)
+    follower._measured(t, point)
+    judged = []
+    for velocity in velocities:
+        t += 0.1
+        point = point + 0.1 * np.asarray(velocity, dtype=float)
+        follower._predict(t)
+        follower._measured(t, point)
+        judged.append(follower._turned_back(t))
+        if judged[-1]:  # coasting from here: back where she would be, walking on
+            assert follower.velocity[1] < -0.5 and follower.track[1] < point[1] - 0.3
+            break
+    return judged
+
+
+def test_a_track_that_runs_back_the_way_it_came_is_on_someone_else():
+    """Walking south at 0.7 m/s for 1 s, then a blob coming back north at 1 m/s (two
+    people crossing in a doorway, the one coming back hiding her): within 0.5 s the
+    track is turned back to its old prediction and coasts. A 90 degree turn (a corner,
+    a door) is hers, and so is walking on."""
+    assert any(_turns_back_while([(0.0, -0.7)] * 10 + [(0.0, 1.0)] * 5))
+    assert not any(_turns_back_while([(0.0, -0.7)] * 10 + [(0.7, 0.0)] * 20))
+    assert not any(_turns_back_while([(0.0, -0.7)] * 30))

@@ -163,12 +163,17 @@ class FollowSettings:
     settle: int = 3  # decisions the way must stay clear (or not) to change the aim
     lookahead: float = 0.5  # m from the axle to the point on the trail steered for
     trail_spacing: float = 0.1  # m between the trail's points
+    door_width: float = 1.2  # m: a gap on her trail narrower than this is a door
+    door_approach: float = 0.8  # m before a door's middle from which the chair is on its axis
+    door_speed: float = 0.4  # m/s at most in door mode
     patience: float = 1.0  # s blocked before backing off
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.2  # m/s
     people_horizon: float = 2.0  # s others' paths are predicted for
     people_margin: float = 0.1  # m kept from others' predicted discs
     walked: float = 0.5  # m a blob must move to count as a walking person
+    split_speed: float = 0.4  # m/s: a blob this fast by her, not hers, is someone else
+    turn_back_within: float = 1.0  # s: a track reversing within this is on someone else
     local_size: float = 5.0  # m, the local costmap's side
     padding: float = 0.05  # m round the footprint in the obstacle check
 
@@ -203,7 +208,8 @@ class TagFollower(BehaviourBase):
         for name in ("distance", "k_gap", "k_turn", "max_speed", "max_turn_rate",
                      "lost_after", "predict_for", "search_turn_rate", "local_size", "seek_for",
                      "braking", "lookahead", "trail_spacing", "patience",
-                     "back_off_distance", "back_off_speed"):
+                     "back_off_distance", "back_off_speed", "door_width", "door_approach",
+                     "door_speed"):
             value = getattr(s, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
@@ -235,8 +241,13 @@ class TagFollower(BehaviourBase):
         self._blocked_since: float | None = None
         self._scan_points: np.ndarray | None = None  # the newest scan's returns (odom)
         self._on_trail = False  # steering along her trail (not straight at her)
+        self.door: tuple[np.ndarray, np.ndarray] | None = None  # (middle, axis) ahead
+        self.lining_up = False  # door mode: on the door's axis
         self._unsettled = 0  # decisions running the way's state has disagreed with that
         self._first_seen: dict[int, np.ndarray] = {}  # others' tracks: where first seen
+        self._hers: int | None = None  # the others' track her lidar updates last matched
+        self._doubted = False  # someone else came near her since the tag was last read
+        self._history: list[tuple[float, np.ndarray, np.ndarray]] = []  # (t, track, velocity)
         self._backing: tuple[float, Pose2D] | None = None  # (since, from) while backing off
         self.track: np.ndarray | None = None  # the person's centre (odom, m)
         self.velocity = np.zeros(2)  # m/s
@@ -272,10 +283,12 @@ class TagFollower(BehaviourBase):
                 # no track yet, or it was on someone else: start again from the tag,
                 # and forget a trail that may be someone else's
                 self.track, self.velocity = named, np.zeros(2)
+                self._history = []
                 self._updated = -math.inf
                 self.trail.clear()
             measured.append(named)
             self._tag_read = frame.t
+            self._doubted = False
         scan = frame.readings.get(LIDAR_FRAME)
         if isinstance(scan, LaserScan) and scan.stamp > self._last_scan:
             self._last_scan = scan.stamp
@@ -288,7 +301,10 @@ class TagFollower(BehaviourBase):
                     measured.append(centre)
         if measured:  # one update a decision: two sources apart would fake a velocity
             self._measured(frame.t, np.mean(measured, axis=0))
-            self.trail.add(self.track)
+            if seen is None and self._turned_back(frame.t):
+                self._doubted = True  # the lidar's blob is someone else's: coast
+            else:
+                self.trail.add(self.track)
         if len(self.trail):
             self.trail.passed((self.pose.x, self.pose.y))
         if self.track is None:
@@ -355,6 +371,11 @@ class TagFollower(BehaviourBase):
             self.refused["someone else near"] = self.refused.get("someone else near", 0) + 1
             return None
         chosen, why = self.identity.choose(candidates, around, self.velocity, dt, s.beta)
+        if chosen is not None:  # the others' track on the same blob is hers
+            tracks = self.others.tracks
+            gaps = [float(np.hypot(*(t.position - chosen))) for t in tracks]
+            self._hers = (tracks[int(np.argmin(gaps))].track_id
+                          if gaps and min(gaps) <= s.gate else None)
         if chosen is None and why == "none near":
             # her returns run into a door's frame (one blob too wide for a person): the
             # returns within a person's reach of the point, if they are compact
@@ -365,19 +386,31 @@ class TagFollower(BehaviourBase):
         return chosen
 
     def _someone_else_near(self) -> bool:
-        """Whether a walking person other than her (the others' tracks that have
-        walked, less the one nearest her track) is within ``gate`` m plus a person's
-        width of her track: one who crosses her way or hides her, when the lidar alone
-        cannot tell them apart."""
+        """Whether someone else has come near her since the tag was last read: a
+        walking person other than her (an other's track that has walked, or is
+        walking at ``split_speed`` or more, not the one her lidar updates last matched,
+        :attr:`_hers`) within ``gate`` m plus a
+        person's width of her track. Once one has, the lidar alone cannot tell which of
+        the two walked on as her (crossing in a doorway, one hides the other, and the
+        blob that comes out may be his), so it is not trusted again until the tag names
+        her (:attr:`_doubted`, cleared in :meth:`update`)."""
         s = self.settings
-        discs = self._walked()
-        if self.track is None or not len(discs):
+        if self._doubted:
+            return True
+        if self.track is None:
             return False
-        gaps = np.hypot(*(discs[:, :2] - self.track).T)
-        nearest = int(np.argmin(gaps))
-        if gaps[nearest] <= s.gate:
-            gaps[nearest] = np.inf  # hers
-        return bool((gaps <= s.gate + 2 * s.person_radius).any())
+        self._walked()  # the others' tracks' first places, for the walked test
+        for track in self.others.tracks:
+            walked = np.hypot(*(track.position - self._first_seen[track.track_id])
+                              ) >= s.walked
+            # or walking off now (a blob that splits from hers as two part)
+            walking = (track.hits >= self.others.confirm
+                       and np.hypot(*track.velocity) >= s.split_speed)
+            if ((walked or walking) and track.track_id != self._hers
+                    and np.hypot(*(track.position - self.track)) <= s.gate
+                    + 2 * s.person_radius):
+                self._doubted = True
+        return self._doubted
 
     def _near_returns(self, scan: LaserScan, sensor: Pose2D, around: np.ndarray
                       ) -> np.ndarray:
@@ -410,10 +443,31 @@ class TagFollower(BehaviourBase):
         if math.isfinite(self._updated) and now > self._updated:
             self.velocity = self.velocity + s.beta / (now - self._updated) * residual
         self._updated = now
+        self._history = [h for h in self._history if now - h[0] <= self.settings.turn_back_within]
+        self._history.append((now, self.track.copy(), self.velocity.copy()))
         camera = self._camera()
         self._side = 1.0 if wrap_angle(math.atan2(self.track[1] - camera.y,
                                                   self.track[0] - camera.x)
                                        - camera.theta) >= 0 else -1.0
+
+    def _turned_back(self, now: float) -> bool:
+        """Whether the track, updated from the lidar alone, now runs back the way it
+        came (its velocity more than 120 degrees from the one ``turn_back_within`` s
+        ago, both at a walk): two people crossing in a doorway, the one coming back
+        hiding her, swap blobs that way, and a person who turns round stands first
+        (and turns her tag to the chair). If so, the track goes back to the older
+        state, moved on at its velocity, and coasts (the identity gate's third rule)."""
+        s = self.settings
+        t0, track0, velocity0 = self._history[0]
+        speeds = math.hypot(*velocity0) * math.hypot(*self.velocity)
+        if now - t0 < s.turn_back_within / 2 or speeds < 0.3 ** 2:
+            return False
+        if float(velocity0 @ self.velocity) > -0.5 * speeds:
+            return False
+        self.track = track0 + velocity0 * (now - t0)
+        self.velocity = velocity0.copy()
+        self._history = [(now, self.track.copy(), self.velocity.copy())]
+        return True
 
     def _pursue(self, target: np.ndarray, velocity: np.ndarray, distance: float) -> Twist:
         """The follow law along the trail to ``target`` (odom, m; the person's centre,
@@ -424,13 +478,20 @@ class TagFollower(BehaviourBase):
         camera = self._camera()
         target = np.asarray(target, dtype=float)
         carrot, along = self._carrot(target)
-        if carrot is target:  # in plain view: the line of sight, as ever
+        if self.lining_up:  # door mode: along its axis
+            origin = (self.pose.x, self.pose.y, self.pose.theta)
+            cap = s.door_speed
+        elif carrot is target:  # in plain view: the line of sight, as ever
             origin = (camera.x, camera.y, camera.theta)
             cap = math.inf
         else:
             origin = (self.pose.x, self.pose.y, self.pose.theta)
             along -= math.hypot(camera.x - self.pose.x, camera.y - self.pose.y)
             cap = self._corner_speed(carrot)
+        if self.door is not None:  # slow enough to be at door_speed by the approach
+            to_door = math.hypot(*(self.door[0] - (self.pose.x, self.pose.y)))
+            cap = min(cap, math.sqrt(s.door_speed ** 2 + 2 * s.braking
+                                     * max(to_door - s.door_approach, 0.0)))
         dx, dy = carrot[0] - origin[0], carrot[1] - origin[1]
         reach = max(math.hypot(dx, dy), 1e-9)
         bearing = wrap_angle(math.atan2(dy, dx) - origin[2])
@@ -450,6 +511,7 @@ class TagFollower(BehaviourBase):
         (module notes: the aim changes after ``settle`` decisions)."""
         camera = self._camera()
         straight = math.hypot(target[0] - camera.x, target[1] - camera.y)
+        self.door, self.lining_up = None, False
         if not len(self.trail):
             return target, straight
         pivot = np.array([self.pose.x, self.pose.y])
@@ -464,8 +526,18 @@ class TagFollower(BehaviourBase):
                 self._on_trail, self._unsettled = not self._on_trail, 0
         else:
             self._unsettled = 0
+        s = self.settings
+        self.door = self._door_ahead(pivot, ahead)  # for the speed, in view of her or not
         if not self._on_trail:
             return target, straight
+        if self.door is not None and math.hypot(*(pivot - self.door[0])) <= (
+                s.door_approach + s.lookahead):  # door mode: along the door's axis
+            self.lining_up = True
+            middle, axis = self.door
+            at = float((pivot - middle) @ axis)  # m along the axis (negative: before it)
+            on = min(max(at + s.lookahead, -s.door_approach), s.door_approach)
+            return middle + on * axis, self.trail.length_from((float(pivot[0]),
+                                                                float(pivot[1])), to=target)
         if clear.all():  # on the trail a moment longer: pure pursuit along it
             at = (float(pivot[0]), float(pivot[1]))
             off = float(math.hypot(*(ahead[0] - pivot)))
@@ -480,6 +552,57 @@ class TagFollower(BehaviourBase):
             k = max(k, int(np.argmax(far)))
         steps = float(np.hypot(*np.diff(ahead[k:], axis=0).T).sum())
         return ahead[k], float(math.hypot(*(ahead[k] - pivot))) + steps
+
+    def _door_ahead(self, pivot: np.ndarray, ahead: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """Door mode (the navigator's, :meth:`~abcwc.behaviours.navigator.Navigator.
+        _through_doors`, on the scan): the first gap narrower than ``door_width`` that
+        the trail ``ahead`` (odom, m, from the point nearest the axle ``pivot``) goes
+        through within reach, as ``(middle, axis)``: the middle between the two nearest
+        returns either side of the trail there (within 0.3 m along it), and the unit way
+        through, at right angles to the line between them; None where there is none,
+        or once the axle is ``lookahead`` m past the middle. From ``door_approach +
+        lookahead`` m of the middle, pure pursuit on that axis lines the chair up
+        before it enters, as a person pushing a wheelchair does, where aiming at the
+        farthest point in view beyond the door would take the frame's corner."""
+        s = self.settings
+        if self._scan_points is None or len(ahead) < 2:
+            return None
+        reach = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
+        path = ahead[reach <= s.door_approach + 2 * s.lookahead + 0.5]
+        if len(path) < 2:
+            return None
+        tangent = np.gradient(path, axis=0)
+        tangent /= np.maximum(np.hypot(*tangent.T), 1e-9)[:, None]
+        points = self._scan_points
+        if self.track is not None:  # her own returns (she may stand in the door)
+            points = points[np.hypot(*(points - self.track).T) > s.person_radius + 0.1]
+        near = np.hypot(*(points - pivot).T) <= reach[len(path) - 1] + s.door_width
+        points = points[near]
+        if not len(points):
+            return None
+        rel = points[None, :, :] - path[:, None, :]  # (K, P, 2)
+        along = (rel * tangent[:, None, :]).sum(axis=2)
+        across = rel[..., 1] * tangent[:, None, 0] - rel[..., 0] * tangent[:, None, 1]
+        beside = np.abs(along) < 0.3  # the nearest return each side, not ahead or behind
+        distance = np.hypot(along, across)
+        left = np.where(beside & (across > 0), distance, np.inf)
+        right = np.where(beside & (across < 0), distance, np.inf)
+        width = left.min(axis=1) + right.min(axis=1)
+        doors = np.flatnonzero(width < s.door_width)
+        if not len(doors):
+            return None
+        run = doors[:np.argmax(np.diff(np.append(doors, doors[-1] + 2)) > 1) + 1]
+        k = int(run[np.argmin(width[run])])
+        left_end = points[int(np.argmin(left[k]))]
+        right_end = points[int(np.argmin(right[k]))]
+        middle = (left_end + right_end) / 2
+        across_line = left_end - right_end
+        axis = np.array([-across_line[1], across_line[0]]) / max(
+            float(np.hypot(*across_line)), 1e-9)
+        if axis @ tangent[k] < 0:
+            axis = -axis
+        return None if float((pivot - middle) @ axis) > s.lookahead else (middle, axis)
 
     def _clear_ways(self, start: np.ndarray, ends: np.ndarray) -> np.ndarray:
         """(K,) whether the straight way from ``start`` to each of ``ends`` (odom, m)
@@ -701,8 +824,9 @@ class TagFollower(BehaviourBase):
         """
         s = self.settings
         discs = self._walked()
-        if self.track is not None and len(discs):
-            discs = discs[np.hypot(*(discs[:, :2] - self.track).T) > s.gate]
+        if self.track is not None and len(discs):  # hers: the one nearest her track
+            gaps = np.hypot(*(discs[:, :2] - self.track).T)
+            discs = discs[(gaps > s.gate) | (np.arange(len(discs)) != np.argmin(gaps))]
         if self.track is not None and self._updated >= self._t - s.lost_after:
             discs = np.vstack([discs, [*self.track, *self.velocity, s.person_radius]])
         if not len(discs):

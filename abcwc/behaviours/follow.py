@@ -27,8 +27,13 @@ names the person), and only through the
 ``gate`` m of the prediction whose update keeps the track under ``max_person_speed``
 (two inside the gate: neither; the track coasts until the tag is read). A tag read more
 than ``gate`` m from the track means the track was on someone else: it starts again
-from the tag. Each update adds the track's point to the person's
-:class:`~abcwc.behaviours.follow_trail.Trail`.
+from the tag. Once another walking person has come within ``gate`` m and a person's
+width of her track, or once her track, updated from the lidar alone, runs back the way
+it came (its velocity more than 120 degrees from the one ``turn_back_within`` s before:
+two people crossing in a doorway, the one coming back hiding her, swap blobs that way),
+the lidar is not trusted again until the tag is read, and a track that turned back goes
+back to its old prediction and coasts. Each update adds the track's point to the
+person's :class:`~abcwc.behaviours.follow_trail.Trail`.
 
 **The way she went.** Where the straight way from the chair's axle to her is clear of
 the scan's returns by the chair's half width and ``clear_of_line`` m, the chair aims at
@@ -43,7 +48,11 @@ so it goes through a door where she did instead of cutting across its frame to h
 aim changes between her and the trail only after the way has been clear (or not) for
 ``settle`` decisions running (meanwhile, on the trail, it pursues the trail point
 ``lookahead`` m ahead): a way at the edge of clear would switch the aim, and the turn,
-to and fro with the scan's noise.
+to and fro with the scan's noise. **Door mode**: where her trail goes through a gap in
+the scan narrower than ``door_width`` (:meth:`TagFollower._door_ahead`), the chair slows
+to be at ``door_speed`` by ``door_approach`` m before the gap's middle, and from there,
+on her trail, it pursues the gap's axis instead, lined up before it enters, as the
+navigator's door mode does.
 
 **Range and bearing.** With ``range`` and ``alpha`` the person's distance and bearing
 from the chair's camera::

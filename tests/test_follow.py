@@ -17,6 +17,7 @@ from abcwc.paths import data_dir
 from abcwc.perception.tags import FollowCard
 from abcwc.sim import SimBase
 from abcwc.sim.world import world_from_dict
+from abcwc.types import Pose2D
 
 
 @pytest.fixture(scope="module")
@@ -210,3 +211,17 @@ def test_a_track_that_runs_back_the_way_it_came_is_on_someone_else():
     assert any(_turns_back_while([(0.0, -0.7)] * 10 + [(0.0, 1.0)] * 5))
     assert not any(_turns_back_while([(0.0, -0.7)] * 10 + [(0.7, 0.0)] * 20))
     assert not any(_turns_back_while([(0.0, -0.7)] * 30))
+
+
+def test_the_search_turns_to_where_she_walked_on_not_where_she_was_last_seen():
+    """Lost 7.5 s ago just left of the camera's axis, walking east at 0.7 m/s across the
+    chair's view: by now she is well to its right, and the search turns right."""
+    params = default_params()
+    follower = TagFollower(FollowCard("ana", 7), GyroOdometry(params=params), params)
+    follower.pose = Pose2D(0.0, 0.0, math.pi / 2)  # facing north
+    camera = follower._camera()
+    follower.track = np.array([camera.x - 0.5, camera.y + 2.0])  # last seen left of it
+    follower.velocity = np.array([0.7, 0.0])
+    follower._updated = 10.0
+    assert follower._side_of_her(10.0) == 1.0  # where she was: left
+    assert follower._side_of_her(17.5) == -1.0  # where she has walked on to: right

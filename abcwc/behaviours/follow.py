@@ -76,16 +76,18 @@ delay ``T`` allows ``k < pi / (2 T)``, 15.7 1/s).
 **Lost.** With neither the tag nor the lidar on the person for ``lost_after`` s the
 chair drives on along her trail to where she was last seen and on towards where she
 would be by now (the track moved on at its last velocity, for at most ``predict_for``
-s); once there, or after ``seek_for`` s, it turns on the spot towards the side she was
-last on at ``search_turn_rate``, and fails, "lost", after a full turn (counted from the
-odometry's heading: the turn made, not the turn asked for) or after twice the time a
-full turn takes.
+s); once there, or after ``seek_for`` s, it turns on the spot at ``search_turn_rate``
+towards the side where she would be by now, walking on at her last velocity
+(:meth:`TagFollower._side_of_her`: she walked on past where the chair lost her), and
+fails, "lost", after a full turn (counted from the odometry's heading: the turn made,
+not the turn asked for) or after twice the time a full turn takes.
 
 **Obstacles.** Every wanted command is checked against a local costmap built from the
 newest lidar scan (``local_size`` m square round the chair, in base_link): the DWA
 planner's footprint check over the window of commands reachable in one cycle. If the
 wanted command's arc is not clear, the clear one nearest to it is sent (speeds scaled
-by their limits); with none, the chair stops. The person is in the scan too, so the
+by their limits), never a faster one than was asked for (a turn on the spot asked for
+is not answered by driving off); with none, the chair stops. The person is in the scan too, so the
 chair never drives into them. Other people are tracked in the scan too (a
 :class:`~abcwc.navigation.people.PeopleTracker` without a map: compact blobs, their
 velocities from an alpha-beta filter; a blob counts as a person once it has moved
@@ -329,6 +331,8 @@ class TagFollower(BehaviourBase):
             wanted = self._pursue(self.track, self.velocity, s.distance)
             self._searching = wanted.v <= 0.02 and abs(wanted.w) <= 0.05  # there: look
         else:
+            if not self._searching or self._search_heading is None:
+                self._side = self._side_of_her(frame.t)
             self._searching = True
             wanted = self._search(frame, self._side)
         command = self._clear_of_obstacles(frame, wanted)
@@ -670,6 +674,22 @@ class TagFollower(BehaviourBase):
         v = min(receding + s.k_gap * gap, stoppable) * max(math.cos(bearing), 0.0)
         return v, s.k_turn * bearing
 
+    def _side_of_her(self, now: float) -> float:
+        """+1 (left) or -1 (right): the side of the camera where she would be by now,
+        walking on at her last velocity from where she was last seen (the track itself
+        moved on for ``lost_after + predict_for`` s; on from there for as long as the
+        follower went to look for her): she walked on past where the chair lost her."""
+        s = self.settings
+        if self.track is None:
+            return self._side
+        walked_on = min(now - self._updated, s.lost_after + s.seek_for)
+        where = self.track + self.velocity * max(walked_on - s.lost_after - s.predict_for,
+                                                 0.0)
+        camera = self._camera()
+        bearing = wrap_angle(math.atan2(where[1] - camera.y, where[0] - camera.x)
+                             - camera.theta)
+        return 1.0 if bearing >= 0 else -1.0
+
     def _search(self, frame: SensorFrame, side: float) -> Twist:
         """Turn on the spot towards ``side`` (+1 left, -1 right); fail after a full
         turn, the turn the odometry says was made (not the one asked for), or after
@@ -735,6 +755,7 @@ class TagFollower(BehaviourBase):
         samples[stopped, 0] = 0.0
         valid = self.planner.check(local, Pose2D(), samples).valid
         valid &= self._clear_of_people(samples, ahead, alongside)
+        valid[1:] &= samples[1:, 0] <= wanted.v + 0.05  # never faster than asked
         if valid[0]:
             self._blocked_since = None
             return Twist(float(samples[0, 0]), float(samples[0, 1]))

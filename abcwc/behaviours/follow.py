@@ -264,7 +264,7 @@ class TagFollower(BehaviourBase):
         self.velocity = np.zeros(2)  # m/s
         self._t = self._updated = self._tag_read = -math.inf
         self._last_scan = -math.inf
-        self._side = 1.0
+        self._side = 1.0  # the way the search turns (+1 left), set as it starts
         self.others = PeopleTracker(None, None, max_extent=self.settings.max_extent,
                                     person_radius=self.settings.person_radius)
         self.driven_at = Twist(0.0, 0.0)  # what the pots drive the chair at, each decision
@@ -331,7 +331,7 @@ class TagFollower(BehaviourBase):
             wanted = self._pursue(self.track, self.velocity, s.distance)
             self._searching = wanted.v <= 0.02 and abs(wanted.w) <= 0.05  # there: look
         else:
-            if not self._searching or self._search_heading is None:
+            if self._search_heading is None:  # the search starts
                 self._side = self._side_of_her(frame.t)
             self._searching = True
             wanted = self._search(frame, self._side)
@@ -412,10 +412,7 @@ class TagFollower(BehaviourBase):
             return True
         if self.track is None:
             return False
-        self._walked()  # the others' tracks' first places, for the walked test
-        for track in self.others.tracks:
-            walked = np.hypot(*(track.position - self._first_seen[track.track_id])
-                              ) >= s.walked
+        for track, walked in zip(self.others.tracks, self._walked_mask()):
             # or walking off now (a blob that splits from hers as two part)
             walking = (track.hits >= self.others.confirm
                        and np.hypot(*track.velocity) >= s.split_speed)
@@ -456,12 +453,8 @@ class TagFollower(BehaviourBase):
         if math.isfinite(self._updated) and now > self._updated:
             self.velocity = self.velocity + s.beta / (now - self._updated) * residual
         self._updated = now
-        self._history = [h for h in self._history if now - h[0] <= self.settings.turn_back_within]
+        self._history = [h for h in self._history if now - h[0] <= s.turn_back_within]
         self._history.append((now, self.track.copy(), self.velocity.copy()))
-        camera = self._camera()
-        self._side = 1.0 if wrap_angle(math.atan2(self.track[1] - camera.y,
-                                                  self.track[0] - camera.x)
-                                       - camera.theta) >= 0 else -1.0
 
     def _turned_back(self, now: float) -> bool:
         """Whether the track, updated from the lidar alone, now runs back the way it
@@ -680,8 +673,7 @@ class TagFollower(BehaviourBase):
         moved on for ``lost_after + predict_for`` s; on from there for as long as the
         follower went to look for her): she walked on past where the chair lost her."""
         s = self.settings
-        if self.track is None:
-            return self._side
+        assert self.track is not None
         walked_on = min(now - self._updated, s.lost_after + s.seek_for)
         where = self.track + self.velocity * max(walked_on - s.lost_after - s.predict_for,
                                                  0.0)
@@ -833,19 +825,22 @@ class TagFollower(BehaviourBase):
         nearest = check.clearance.min(axis=0)[0]  # (T + 1,): the nearest circle, per pose
         return bool(np.all(nearest >= nearest[0] - 1e-9) and nearest[-1] > nearest[0])
 
-    def _walked(self) -> np.ndarray:
-        """(M, 5) the moving discs of the others' tracks that have walked
-        ``walked`` m or more from where each was first seen: without a map, the end of a
+    def _walked_mask(self) -> np.ndarray:
+        """(M,) for each of the others' tracks, whether it has walked ``walked`` m or
+        more from where it was first seen (noted here): without a map, the end of a
         wall at a door is a compact blob too, and its track drifts a little as the chair
         moves round it; someone standing is in the scan, and so in the costmap."""
         for track in self.others.tracks:
             self._first_seen.setdefault(track.track_id, track.position.copy())
-        walked = [track for track in self.others.tracks
-                  if np.hypot(*(track.position - self._first_seen[track.track_id]))
-                  >= self.settings.walked]
+        return np.array([np.hypot(*(track.position - self._first_seen[track.track_id]))
+                         >= self.settings.walked for track in self.others.tracks],
+                        dtype=bool)
+
+    def _walked(self) -> np.ndarray:
+        """(M, 5) the moving discs of the others' tracks that have walked
+        (:meth:`_walked_mask`)."""
         discs = self.others.moving_discs()
-        keep = np.array([track in walked for track in self.others.tracks], dtype=bool)
-        return discs[keep] if len(discs) else discs
+        return discs[self._walked_mask()] if len(discs) else discs
 
     def _people_in_base(self) -> tuple[np.ndarray, np.ndarray]:
         """Two (M, 5) arrays of DWA's moving discs (x, y, vx, vy, radius) in base_link:

@@ -277,10 +277,16 @@ def _kept_cells(solution: NotebookNode, name: str) -> list[tuple[int, str, str]]
 
 def student_notebook(solution: NotebookNode, name: str) -> NotebookNode:
     """Build the student version of a solution notebook (``name`` like ``"01_joystick"``)."""
+    return _student_notebook(solution, name, _kept_cells(solution, name))
+
+
+def _student_notebook(solution: NotebookNode, name: str,
+                      kept: list[tuple[int, str, str]]) -> NotebookNode:
+    """The student notebook of the solution's ``kept`` cells (:func:`_kept_cells`)."""
     nb = nbformat.v4.new_notebook()
     nb.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": {"name": "python"}}
     seen_ids: set[str] = set()
-    for index, _, new_source in _kept_cells(solution, name):
+    for index, _, new_source in kept:
         cell = solution.cells[index]
         cell_id = _cell_id(cell, name, index, seen_ids)
         metadata = _student_metadata(cell.get("metadata", {}))
@@ -300,16 +306,17 @@ def nbgrader_source(solution: NotebookNode, name: str) -> NotebookNode:
     """The chapter's nbgrader source notebook (:mod:`abcwc.course_nbgrader`): the student
     notebook's cells with the solution's source and nbgrader's metadata."""
     kept = _kept_cells(solution, name)
-    exercises = [_exercise(source, solution.cells[index].cell_type, name, index)
+    exercises = [_exercise(source, solution.cells[index].cell_type, index)
                  for index, source, _ in kept]
     try:
         return course_nbgrader.nbgrader_notebook(
-            student_notebook(solution, name), [source for _, source, _ in kept], exercises)
+            _student_notebook(solution, name, kept), [source for _, source, _ in kept],
+            exercises)
     except course_nbgrader.CheckCellError as exc:
         raise CourseBuildError(name, str(exc), kept[exc.cell][0]) from None
 
 
-def _exercise(source: str, cell_type: str, notebook: str, cell: int) -> str | None:
+def _exercise(source: str, cell_type: str, cell: int) -> str | None:
     """The exercise's name: the function around the cell's first solution block (a
     written answer: ``answer_<cell index>``); ``None`` when the cell has no block."""
     lines = source.split("\n")

@@ -252,11 +252,12 @@ def _not_written(exc: NotImplementedError, args: tuple) -> str:
     stub, ``raise NotImplementedError()``, says nothing, and the student's function it
     was raised in names it)."""
     message = str(exc)
-    stub = message.partition(": replace these lines")[0]
-    if not message:
+    if message:
+        stub, marker, _ = message.partition(": replace these lines")
+        if not marker:
+            return NOT_WRITTEN
+    else:
         stub = _raised_in(exc)
-    elif stub == message:
-        return NOT_WRITTEN
     if not stub:
         return NOT_WRITTEN
     checked = {getattr(a, "__name__", None) for a in args if callable(a)} - {None}

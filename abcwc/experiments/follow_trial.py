@@ -34,6 +34,7 @@ import numpy as np
 
 from abcwc.behaviours.follow import FollowLaw, FollowSettings, TagFollower, ThesisFollower
 from abcwc.estimation.gyro import GyroOdometry
+from abcwc.experiments.disk_cache import cached_on_disk
 from abcwc.experiments.navigation_trial import gap_to_people
 from abcwc.geometry import compose, transform_points
 from abcwc.paths import data_dir
@@ -206,13 +207,22 @@ TRIAL_WORLDS = ("lab", "building")
 
 def run_trial_in(where: str, seed: int = 0, thesis: bool = False) -> FollowResult:
     """The follow trial ``where`` (one of :data:`TRIAL_WORLDS`): two minutes in the lab,
-    or ``BUILDING_SECONDS`` in the building, for one ``seed``."""
+    or ``BUILDING_SECONDS`` in the building, for one ``seed``. A seeded drive: its
+    result is kept on disk (:func:`~abcwc.experiments.disk_cache.cached_on_disk`), so
+    chapter 17, its student copy and the follower's tests drive each trial once."""
+    if where not in TRIAL_WORLDS:
+        raise ValueError(f"unknown follow trial {where!r}; allowed: {', '.join(TRIAL_WORLDS)}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise ValueError(f"seed must be a whole number, got {seed!r}")
+    return _trial_in(where, int(seed), bool(thesis))
+
+
+@cached_on_disk
+def _trial_in(where: str, seed: int, thesis: bool) -> FollowResult:
     if where == "lab":
         return run_follow_trial(seconds=120.0, seed=seed, thesis=thesis)
-    if where == "building":
-        return run_follow_trial(seconds=BUILDING_SECONDS, seed=seed, thesis=thesis,
-                                world=building_follow_world())
-    raise ValueError(f"unknown follow trial {where!r}; allowed: {', '.join(TRIAL_WORLDS)}")
+    return run_follow_trial(seconds=BUILDING_SECONDS, seed=seed, thesis=thesis,
+                            world=building_follow_world())
 
 
 def trials_table(results: dict[tuple[str, str, int], FollowResult]) -> str:

@@ -45,8 +45,8 @@ from abcwc.nbval_plugin import KERNEL_ENV
 from abcwc.paths import require_checkout
 
 __all__ = ["CHAPTER", "ClassRun", "HubError", "LocalHub", "StudentRun", "class_figures",
-           "class_table", "doubling_point", "nbgitpuller_link", "proxy_command", "run_class",
-           "run_student"]
+           "class_table", "doubling_point", "free_port", "nbgitpuller_link", "proxy_command",
+           "run_class", "run_student"]
 
 CHAPTER = "course/00_tour.ipynb"
 """The chapter a trial runs by default (the quickest that drives the chair: about 4 s alone
@@ -100,7 +100,7 @@ def course_repository(checkout: Path, where: Path, branch: str = "main") -> Path
     return where
 
 
-def _free_port() -> int:
+def free_port() -> int:
     """A TCP port on 127.0.0.1 that nothing listens on now."""
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -188,7 +188,7 @@ class LocalHub:
             raise HubError("this hub is already started")
         self.folder.mkdir(parents=True, exist_ok=True)
         course_repository(self.checkout, self.repository)
-        port, hub_port, api_port = _free_port(), _free_port(), _free_port()
+        port, hub_port, api_port = free_port(), free_port(), free_port()
         config = self.folder / "jupyterhub_config.py"
         config.write_text(self._config(port, hub_port, api_port), encoding="utf-8")
         self.url = f"http://127.0.0.1:{port}"

@@ -1,12 +1,10 @@
 """What the browser tests share: Debian's ``chromium`` (Playwright drives it; no browser
-download), a skip (a failure under CI) when it or Playwright is missing, and a free port
-for a server."""
+download), and a skip (a failure under CI) when it or Playwright is missing."""
 
 from __future__ import annotations
 
 import os
 import shutil
-import socket
 
 import pytest
 
@@ -29,8 +27,3 @@ def require_browser() -> None:
         pytest.skip(message)
 
 
-def free_port() -> int:
-    """A TCP port on 127.0.0.1 that nothing listens on now."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]

@@ -22,8 +22,9 @@ from pathlib import Path
 import nbformat
 import pytest
 
+from abcwc.hub import free_port
 from abcwc.ui.dashboard import VOILA_IP, WORLD_VARIABLE, voila_command
-from tests.browser_helpers import CHROMIUM, free_port, require_browser
+from tests.browser_helpers import CHROMIUM, require_browser
 
 CENTRE = (5.0, 4.0)  # the lab world's places the errands go to
 BENCH = (6.8, 3.2)

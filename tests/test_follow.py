@@ -17,7 +17,7 @@ from abcwc.paths import data_dir
 from abcwc.perception.tags import FollowCard
 from abcwc.sim import SimBase
 from abcwc.sim.world import world_from_dict
-from abcwc.types import Pose2D
+from abcwc.types import LIDAR_FRAME, Pose2D
 
 
 @pytest.fixture(scope="module")
@@ -225,3 +225,60 @@ def test_the_search_turns_to_where_she_walked_on_not_where_she_was_last_seen():
     follower._updated = 10.0
     assert follower._side_of_her(10.0) == 1.0  # where she was: left
     assert follower._side_of_her(17.5) == -1.0  # where she has walked on to: right
+
+
+def _follower_at_origin() -> TagFollower:
+    params = default_params()
+    follower = TagFollower(FollowCard("ana", 7), GyroOdometry(params=params), params)
+    follower.pose = Pose2D(0.0, 0.0, 0.0)  # odom = base_link
+    return follower
+
+
+def test_someone_standing_by_the_chairs_front_is_given_way_and_she_is_not():
+    """Someone standing 0.23 m beside the front half of the chair (coming out of a door
+    the chair blocks) is in its way, so a blocked chair backs off ``give_way`` m, not
+    ``back_off_distance``; someone 1.3 m ahead, someone behind, and she herself (her
+    track's disc) are not."""
+    follower = _follower_at_origin()
+    standing: list[tuple[float, float]] = []
+    follower._walked = lambda: np.array([[x, y, 0.0, 0.0, 0.25] for x, y in standing]
+                                        ).reshape(-1, 5)
+    standing[:] = [(0.35, -0.72)]  # outline to y = -0.24: 0.72 - 0.24 - 0.25 = 0.23 m
+    assert follower._someone_in_the_way()
+    standing[:] = [(2.0, 0.0)]  # front at x = 0.45: 2.0 - 0.45 - 0.25 = 1.3 m ahead
+    assert not follower._someone_in_the_way()
+    standing[:] = [(-0.8, 0.0)]  # behind the axle
+    assert not follower._someone_in_the_way()
+    follower.track = np.array([0.9, 0.0])  # her, standing right in front
+    standing[:] = [(0.9, 0.0)]
+    assert not follower._someone_in_the_way()
+    standing[:] = [(0.9, 0.0), (0.35, -0.72)]
+    assert follower._someone_in_the_way()
+
+
+def test_a_coasting_track_is_not_taken_up_by_a_pillar():
+    """A compact blob that never walks (a pillar, a door's frame) near her track: while
+    the track is fresh (updated 0.1 s ago) the lidar may update it from the blob, but
+    once it has coasted (1 s without a sighting) only a blob that walks can be her, so
+    the track is not led off along the walls."""
+    world = world_from_dict({
+        "name": "pillar", "walls": [[[3.0, -0.15], [3.3, -0.15], [3.3, 0.15], [3.0, 0.15],
+                                     [3.0, -0.15]]],
+        "places": {"start": [0.0, 0.0, 0.0]}, "people": []})
+    chair = SimBase(world, lidar=True)
+    follower = _follower_at_origin()
+    sensor = compose(follower.pose, Pose2D(*chair.params.lidar.mount))
+    for _ in range(round(1.0 / chair.period)):  # a second of scans: a track, standing
+        frame = chair.step()
+        scan = frame.readings[LIDAR_FRAME]
+        follower.others.update(scan, sensor, frame.t)
+    pillar = follower.others.detect(scan, sensor)
+    assert len(pillar) == 1 and 2.9 < pillar[0, 0] < 3.5
+    assert not follower._walked_mask().any()
+    follower.track, follower.velocity = pillar[0] + (0.0, 0.2), np.zeros(2)
+    follower._tag_read = follower._t = frame.t
+    follower._updated = frame.t - 0.1
+    taken = follower._lidar_centre(scan, None, frame.t)
+    assert taken is not None and np.allclose(taken, pillar[0])
+    follower._updated = frame.t - 1.0
+    assert follower._lidar_centre(scan, None, frame.t) is None

@@ -32,7 +32,11 @@ width of her track, or once her track, updated from the lidar alone, runs back t
 it came (its velocity more than 120 degrees from the one ``turn_back_within`` s before:
 two people crossing in a doorway, the one coming back hiding her, swap blobs that way),
 the lidar is not trusted again until the tag is read, and a track that turned back goes
-back to its old prediction and coasts. Each update adds the track's point to the
+back to its old prediction and coasts. A track that has coasted (no update for
+``lost_after`` s) is taken up again by the lidar only from a blob that walks (an
+others' track that has moved ``walked`` m): a door's frame or a wall's corner is a
+compact blob too, and one near a coasting guess would lead the track off along the
+walls. Each update adds the track's point to the
 person's :class:`~abcwc.behaviours.follow_trail.Trail`.
 
 **The way she went.** Where the straight way from the chair's axle to her is clear of
@@ -110,6 +114,10 @@ clear one is a stop) for ``patience`` s, the chair backs off ``back_off_distance
 ``back_off_speed`` (measured by the odometry), while the range sensors behind, the
 costmap and everyone's predicted way (people behind as they walk, here) leave room,
 then tries again: the navigator's back-off recovery, for a chair wedged in a doorway.
+When someone other than her stands ahead of the axle within a person's width of the
+chair (:meth:`TagFollower._someone_in_the_way`: at a door, someone coming out whom the
+chair blocks, and who waits for it), it backs off ``give_way`` m instead, out of the
+door's mouth, so that they can pass.
 """
 
 from __future__ import annotations
@@ -180,6 +188,7 @@ class FollowSettings:
     patience: float = 1.0  # s blocked before backing off
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.2  # m/s
+    give_way: float = 1.0  # m backed off when someone else stands in the way
     people_horizon: float = 2.0  # s others' paths are predicted for
     people_margin: float = 0.1  # m kept from others' predicted discs
     walked: float = 0.5  # m a blob must move to count as a walking person
@@ -259,7 +268,8 @@ class TagFollower(BehaviourBase):
         self._hers: int | None = None  # the others' track her lidar updates last matched
         self._doubted = False  # someone else came near her since the tag was last read
         self._history: list[tuple[float, np.ndarray, np.ndarray]] = []  # (t, track, velocity)
-        self._backing: tuple[float, Pose2D] | None = None  # (since, from) while backing off
+        # (since, from, how far) while backing off
+        self._backing: tuple[float, Pose2D, float] | None = None
         self.track: np.ndarray | None = None  # the person's centre (odom, m)
         self.velocity = np.zeros(2)  # m/s
         self._t = self._updated = self._tag_read = -math.inf
@@ -383,13 +393,18 @@ class TagFollower(BehaviourBase):
         if named is None and self._someone_else_near():
             self.refused["someone else near"] = self.refused.get("someone else near", 0) + 1
             return None
+        if dt > s.lost_after:
+            # her track has coasted: a blob near its guess is hers only if it walks (a
+            # door's frame or a wall's corner is a compact blob too, and would lead the
+            # track off through the walls)
+            candidates = candidates[self._walking_blobs(candidates)]
         chosen, why = self.identity.choose(candidates, around, self.velocity, dt, s.beta)
         if chosen is not None:  # the others' track on the same blob is hers
             tracks = self.others.tracks
             gaps = [float(np.hypot(*(t.position - chosen))) for t in tracks]
             self._hers = (tracks[int(np.argmin(gaps))].track_id
                           if gaps and min(gaps) <= s.gate else None)
-        if chosen is None and why == "none near":
+        if chosen is None and why == "none near" and dt <= s.lost_after:
             # her returns run into a door's frame (one blob too wide for a person): the
             # returns within a person's reach of the point, if they are compact
             chosen, why = self.identity.choose(self._near_returns(scan, sensor, around),
@@ -397,6 +412,15 @@ class TagFollower(BehaviourBase):
         if chosen is None:
             self.refused[why] = self.refused.get(why, 0) + 1
         return chosen
+
+    def _walking_blobs(self, candidates: np.ndarray) -> np.ndarray:
+        """(K,) whether each candidate (K, 2) is on an others' track that has walked
+        (:meth:`_walked_mask`)."""
+        walked = [t.position for t, w in zip(self.others.tracks, self._walked_mask()) if w]
+        if not len(walked) or not len(candidates):
+            return np.zeros(len(candidates), dtype=bool)
+        gaps = np.hypot(*(candidates[:, None, :] - np.array(walked)[None]).transpose(2, 0, 1))
+        return gaps.min(axis=1) <= self.settings.gate
 
     def _someone_else_near(self) -> bool:
         """Whether someone else has come near her since the tag was last read: a
@@ -765,7 +789,9 @@ class TagFollower(BehaviourBase):
                 self._blocked_since = frame.t
             elif frame.t - self._blocked_since >= s.patience:
                 self._blocked_since = None
-                self._backing = (frame.t, self.pose)
+                distance = (s.give_way if self._someone_in_the_way()
+                            else s.back_off_distance)
+                self._backing = (frame.t, self.pose, distance)
                 return self._back_off(frame, local, ahead, alongside)
         else:
             self._blocked_since = None
@@ -792,28 +818,46 @@ class TagFollower(BehaviourBase):
 
     def _back_off(self, frame: SensorFrame, local: Costmap, ahead: np.ndarray,
                   alongside: np.ndarray) -> Twist:
-        """Reverse ``back_off_distance`` m (measured by the odometry) at
+        """Reverse ``back_off_distance`` m (``give_way`` m when someone else stands in
+        the way: :meth:`_someone_in_the_way`), measured by the odometry, at
         ``back_off_speed`` while the range sensors behind, the costmap (the way must not
         take the chair nearer to what it sees) and everyone's predicted way (people
         behind as they walk, here) leave room; else stop and wait."""
         assert self._backing is not None
         s = self.settings
-        since, start = self._backing
+        since, start, distance = self._backing
         moved = math.hypot(self.pose.x - start.x, self.pose.y - start.y)
         behind, _ = self.stopping.clearance(frame, forward=False)
         back = np.array([[-s.back_off_speed, 0.0]])
         people = np.vstack([ahead, alongside]).reshape(-1, 5)
         room = (behind > self.stopping.braking_distance(s.back_off_speed)
-                + s.back_off_distance - moved
+                + min(distance - moved, s.back_off_distance)
                 and self._gets_away(local, back)
                 and (not len(people) or self.planner.people_gap(
                     Pose2D(), back, people, s.people_horizon)[0] > s.people_margin))
-        limit = 3 * s.back_off_distance / s.back_off_speed
-        if not room or moved >= s.back_off_distance or frame.t - since > limit:
+        limit = 3 * distance / s.back_off_speed
+        if not room or moved >= distance or frame.t - since > limit:
             self._backing = None
             return Twist(0.0, 0.0)
         self.state = "backing off"
         return Twist(-s.back_off_speed, 0.0)
+
+    def _someone_in_the_way(self) -> bool:
+        """Whether someone other than her (:meth:`_others`) stands ahead of the axle
+        within a person's width (``2 person_radius``) of the chair's outline: at a
+        door, someone coming out whom the chair blocks, and who cannot pass until it
+        has backed out of the door's mouth."""
+        s = self.settings
+        people = self._to_base(self._others())
+        people = people[people[:, 0] > 0.0]
+        if not len(people):
+            return False
+        outline = np.asarray(self.params.footprint, dtype=float)
+        nearest = np.column_stack([
+            np.clip(people[:, 0], outline[:, 0].min(), outline[:, 0].max()),
+            np.clip(people[:, 1], outline[:, 1].min(), outline[:, 1].max())])
+        gaps = np.hypot(*(people[:, :2] - nearest).T) - people[:, 4]
+        return bool(np.any(gaps < 2 * s.person_radius))
 
     def _gets_away(self, local: Costmap, sample: np.ndarray) -> bool:
         """Whether the chair's arc for ``sample`` ((1, 2): v, w) is clear in ``local``,
@@ -842,25 +886,37 @@ class TagFollower(BehaviourBase):
         discs = self.others.moving_discs()
         return discs[self._walked_mask()] if len(discs) else discs
 
+    def _others(self) -> np.ndarray:
+        """(M, 5) DWA's moving discs (x, y, vx, vy, radius; odom) of the others who
+        have walked (:meth:`_walked`), hers left out: the one nearest her track, within
+        ``gate`` of it."""
+        discs = self._walked()
+        if self.track is not None and len(discs):
+            gaps = np.hypot(*(discs[:, :2] - self.track).T)
+            discs = discs[(gaps > self.settings.gate)
+                          | (np.arange(len(discs)) != np.argmin(gaps))]
+        return discs
+
+    def _to_base(self, discs: np.ndarray) -> np.ndarray:
+        """Moving discs (M, 5) from the odom frame to base_link."""
+        if not len(discs):
+            return np.zeros((0, 5))
+        c, s = math.cos(self.pose.theta), math.sin(self.pose.theta)
+        to_base = np.array([[c, s], [-s, c]])
+        position = (discs[:, :2] - (self.pose.x, self.pose.y)) @ to_base.T
+        return np.column_stack([position, discs[:, 2:4] @ to_base.T, discs[:, 4]])
+
     def _people_in_base(self) -> tuple[np.ndarray, np.ndarray]:
         """Two (M, 5) arrays of DWA's moving discs (x, y, vx, vy, radius) in base_link:
         the people whose centre is ahead of the chair's front (the one followed, from
         the track, and the others tracked in the scan), and those beside or behind it.
         """
         s = self.settings
-        discs = self._walked()
-        if self.track is not None and len(discs):  # hers: the one nearest her track
-            gaps = np.hypot(*(discs[:, :2] - self.track).T)
-            discs = discs[(gaps > s.gate) | (np.arange(len(discs)) != np.argmin(gaps))]
+        discs = self._others()
         if self.track is not None and self._updated >= self._t - s.lost_after:
-            discs = np.vstack([discs, [*self.track, *self.velocity, s.person_radius]])
-        if not len(discs):
-            return discs, discs
-        c, s_ = math.cos(self.pose.theta), math.sin(self.pose.theta)
-        to_base = np.array([[c, s_], [-s_, c]])
-        position = (discs[:, :2] - (self.pose.x, self.pose.y)) @ to_base.T
-        velocity = discs[:, 2:4] @ to_base.T
-        discs = np.column_stack([position, velocity, discs[:, 4]])
+            discs = np.vstack([discs.reshape(-1, 5),
+                               [*self.track, *self.velocity, s.person_radius]])
+        discs = self._to_base(discs)
         in_front = discs[:, 0] > self.front
         return discs[in_front], discs[~in_front]
 

@@ -11,6 +11,12 @@ in a fresh kernel, one test per code cell:
   end without an error (their checks print "not yet" and later cells fall back to the
   library's own functions).
 
+Under pytest-xdist's ``--dist loadscope`` (pyproject's addopts), a student notebook is
+in its solution's scope (:class:`ChapterScopeScheduling`): one worker runs the two, the
+solution first, so the student copy reads the seeded drives the solution kept on disk
+(:mod:`abcwc.experiments.disk_cache`) instead of waiting on their lock while the other
+worker idles beside it.
+
 Kernels start with a fixed environment: this checkout of ``abcwc`` first on the path,
 matplotlib's inline backend (non-interactive; figures still become image/png outputs),
 ``PYTHONHASHSEED=0``, OpenBLAS's Haswell kernels on x86-64 (:data:`BLAS_KERNELS`),
@@ -71,6 +77,11 @@ try:
     from nbval.plugin import IPyNbFile, get_sanitize_patterns
 except ImportError:  # nbval not installed: plain tests still run
     IPyNbFile = None
+try:
+    from xdist.scheduler import LoadScopeScheduling
+except ImportError:  # pytest-xdist not installed: one process runs everything
+    LoadScopeScheduling = None
+SOLUTIONS_DIR = "solutions"  # under the pytest rootdir
 
 
 @contextlib.contextmanager
@@ -125,3 +136,30 @@ if IPyNbFile is not None:
             CourseNotebook.from_parent(parent, path=file_path) if type(node) is IPyNbFile else node
             for node in collected or []
         ]
+
+
+def chapter_scope(scope: str) -> str:
+    """``scope`` (a test's node id up to its last ``::``), with a student notebook
+    ``course/NN_x.ipynb`` named by its solution ``solutions/NN_x.ipynb``."""
+    folder, _, name = scope.partition("/")
+    if folder == LAX_DIR and name.endswith(".ipynb") and "/" not in name:
+        return f"{SOLUTIONS_DIR}/{name}"
+    return scope
+
+
+if LoadScopeScheduling is not None:
+
+    class ChapterScopeScheduling(LoadScopeScheduling):
+        """xdist's ``loadscope``, with a chapter's two notebooks one scope
+        (:func:`chapter_scope`); its items keep their collection order, so the
+        solution (collected before ``course/``) runs first."""
+
+        def _split_scope(self, nodeid: str) -> str:
+            return chapter_scope(super()._split_scope(nodeid))
+
+    @pytest.hookimpl(optionalhook=True)
+    def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
+        """:class:`ChapterScopeScheduling` for ``--dist loadscope``; xdist's own otherwise."""
+        if config.getvalue("dist") != "loadscope":
+            return None
+        return ChapterScopeScheduling(config, log)

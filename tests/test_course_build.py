@@ -484,3 +484,20 @@ def test_student_notebook_runs_to_the_end_with_not_yet_and_fallback(tmp_path, mo
     plot = nb.cells[-1].outputs
     assert [out.output_type for out in plot] == ["display_data"]
     assert "image/png" in plot[0].data
+
+
+def test_a_student_notebook_is_scheduled_with_its_solution():
+    """Under ``--dist loadscope`` a chapter's two notebooks are one scope (one worker runs
+    them, the solution first), every other scope is xdist's own."""
+    from abcwc.nbval_plugin import ChapterScopeScheduling, chapter_scope
+
+    assert chapter_scope("course/10_the_ekf.ipynb") == "solutions/10_the_ekf.ipynb"
+    for scope in ("solutions/10_the_ekf.ipynb", "tests/test_slam.py",
+                  "tests/test_dwa.py::TestWindow", "course/nbgrader/source/10/10.ipynb",
+                  "course/README.md"):
+        assert chapter_scope(scope) == scope
+    scheduler = ChapterScopeScheduling.__new__(ChapterScopeScheduling)  # needs no workers
+    assert scheduler._split_scope("course/04_speech_commands.ipynb::Cell 12") == \
+        "solutions/04_speech_commands.ipynb"
+    assert scheduler._split_scope("tests/test_slam.py::test_x[fr079-0.061]") == \
+        "tests/test_slam.py"

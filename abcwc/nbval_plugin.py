@@ -11,21 +11,11 @@ in a fresh kernel, one test per code cell:
   end without an error (their checks print "not yet" and later cells fall back to the
   library's own functions).
 
-Under pytest-xdist's ``--dist loadscope`` (pyproject's addopts), a student notebook is
-in its solution's scope (:class:`ChapterScopeScheduling`): one worker runs the two, the
-solution first, so the student copy reads the seeded drives the solution kept on disk
-(:mod:`abcwc.experiments.disk_cache`) instead of waiting on their lock while the other
-worker idles beside it.
-
-Kernels start with a fixed environment: this checkout of ``abcwc`` first on the path,
-matplotlib's inline backend (non-interactive; figures still become image/png outputs),
-``PYTHONHASHSEED=0``, OpenBLAS's Haswell kernels on x86-64 (:data:`BLAS_KERNELS`),
-and ``ABCWC_PORT=simavr``: a test run never talks to a real chair,
-and every real-chair cell (:func:`abcwc.hardware_chair`) runs against our firmware on a
-simulated Arduino. Where the AVR toolchain and simavr are missing (outside CI),
-``ABCWC_PORT`` is removed instead and those cells say they are skipped; under CI
-(``CI=true``) it stays set, those cells print which tools are missing (a missing device
-never crashes a cell), and the firmware's own tests fail.
+Under pytest-xdist's ``--dist loadscope`` (pyproject's addopts), a chapter's two
+notebooks and its checks' tests are one scope (:class:`ChapterScopeScheduling`): one
+worker runs them in collection order (tests, solution, student copy), so the later ones
+read the seeded results the first kept on disk (:mod:`abcwc.experiments.disk_cache`)
+instead of waiting on their lock while the other worker idles beside it.
 """
 
 from __future__ import annotations
@@ -33,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import os
 import platform
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -139,20 +130,25 @@ if IPyNbFile is not None:
 
 
 def chapter_scope(scope: str) -> str:
-    """``scope`` (a test's node id up to its last ``::``), with a student notebook
-    ``course/NN_x.ipynb`` named by its solution ``solutions/NN_x.ipynb``."""
-    folder, _, name = scope.partition("/")
-    if folder == LAX_DIR and name.endswith(".ipynb") and "/" not in name:
-        return f"{SOLUTIONS_DIR}/{name}"
-    return scope
+    """``scope`` (a test's node id up to its last ``::``), or ``chapter NN`` for chapter
+    NN's notebooks (``solutions/NN_x.ipynb``, ``course/NN_x.ipynb``) and its checks'
+    tests (``tests/test_checks_chNN.py``)."""
+    chapter = _CHAPTER_FILE.fullmatch(scope)
+    if chapter is None:
+        return scope
+    return f"chapter {chapter['notebook'] or chapter['checks']}"
+
+
+_CHAPTER_FILE = re.compile(rf"(?:{SOLUTIONS_DIR}|{LAX_DIR})/(?P<notebook>\d\d)_[^/]*\.ipynb"
+                           r"|tests/test_checks_ch(?P<checks>\d\d)\.py")
 
 
 if LoadScopeScheduling is not None:
 
     class ChapterScopeScheduling(LoadScopeScheduling):
-        """xdist's ``loadscope``, with a chapter's two notebooks one scope
-        (:func:`chapter_scope`); its items keep their collection order, so the
-        solution (collected before ``course/``) runs first."""
+        """xdist's ``loadscope``, with a chapter's notebooks and checks' tests one scope
+        (:func:`chapter_scope`); its items keep their collection order (``tests/``,
+        ``solutions/``, ``course/``: pyproject's testpaths)."""
 
         def _split_scope(self, nodeid: str) -> str:
             return chapter_scope(super()._split_scope(nodeid))

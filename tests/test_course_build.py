@@ -486,18 +486,19 @@ def test_student_notebook_runs_to_the_end_with_not_yet_and_fallback(tmp_path, mo
     assert "image/png" in plot[0].data
 
 
-def test_a_student_notebook_is_scheduled_with_its_solution():
-    """Under ``--dist loadscope`` a chapter's two notebooks are one scope (one worker runs
-    them, the solution first), every other scope is xdist's own."""
+def test_a_chapters_notebooks_and_checks_are_scheduled_together():
+    """Under ``--dist loadscope`` a chapter's two notebooks and its checks' tests are one
+    scope (one worker runs them, in collection order); every other scope is xdist's own."""
     from abcwc.nbval_plugin import ChapterScopeScheduling, chapter_scope
 
-    assert chapter_scope("course/10_the_ekf.ipynb") == "solutions/10_the_ekf.ipynb"
-    for scope in ("solutions/10_the_ekf.ipynb", "tests/test_slam.py",
-                  "tests/test_dwa.py::TestWindow", "course/nbgrader/source/10/10.ipynb",
-                  "course/README.md"):
+    for scope in ("solutions/10_the_ekf.ipynb", "course/10_the_ekf.ipynb",
+                  "tests/test_checks_ch10.py"):
+        assert chapter_scope(scope) == "chapter 10"
+    for scope in ("tests/test_slam.py", "tests/test_dwa.py::TestWindow",
+                  "tests/test_checks_ch00_ch01.py", "course/nbgrader/source/10/10.ipynb",
+                  "course/README.md", "solutions/10_the_ekf.py"):
         assert chapter_scope(scope) == scope
     scheduler = ChapterScopeScheduling.__new__(ChapterScopeScheduling)  # needs no workers
-    assert scheduler._split_scope("course/04_speech_commands.ipynb::Cell 12") == \
-        "solutions/04_speech_commands.ipynb"
+    assert scheduler._split_scope("course/04_speech_commands.ipynb::Cell 12") == "chapter 04"
     assert scheduler._split_scope("tests/test_slam.py::test_x[fr079-0.061]") == \
         "tests/test_slam.py"

@@ -15,7 +15,10 @@ Under pytest-xdist's ``--dist loadscope`` (pyproject's addopts), a chapter's two
 notebooks and its checks' tests are one scope (:class:`ChapterScopeScheduling`): one
 worker runs them in collection order (tests, solution, student copy), so the later ones
 read the seeded results the first kept on disk (:mod:`abcwc.experiments.disk_cache`)
-instead of waiting on their lock while the other worker idles beside it.
+instead of waiting on their lock while the other worker idles beside it. The scopes
+named by the ini option ``slow_scopes`` go out first, in its order (xdist's own order
+is by number of tests, which leaves a module of a few long tests to the end, with the
+other worker idle beside it); the rest follow in xdist's order.
 """
 
 from __future__ import annotations
@@ -143,6 +146,20 @@ _CHAPTER_FILE = re.compile(rf"(?:{SOLUTIONS_DIR}|{LAX_DIR})/(?P<notebook>\d\d)_[
                            r"|tests/test_checks_ch(?P<checks>\d\d)\.py")
 
 
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addini("slow_scopes", type="linelist", default=[],
+                  help="xdist scopes (chapter_scope's names) handed out first, in order")
+
+
+def put_first(workqueue: dict[str, object], slow: list[str]) -> None:
+    """Move the first of ``slow`` still in ``workqueue`` (an OrderedDict, scope -> its
+    tests) to its front; with none left, leave it as it is."""
+    for scope in slow:
+        if scope in workqueue:
+            workqueue.move_to_end(scope, last=False)  # type: ignore[attr-defined]
+            return
+
+
 if LoadScopeScheduling is not None:
 
     class ChapterScopeScheduling(LoadScopeScheduling):
@@ -150,8 +167,16 @@ if LoadScopeScheduling is not None:
         (:func:`chapter_scope`); its items keep their collection order (``tests/``,
         ``solutions/``, ``course/``: pyproject's testpaths)."""
 
+        def __init__(self, config: pytest.Config, log: object = None) -> None:
+            super().__init__(config, log)
+            self.slow = [chapter_scope(scope) for scope in config.getini("slow_scopes")]
+
         def _split_scope(self, nodeid: str) -> str:
             return chapter_scope(super()._split_scope(nodeid))
+
+        def _assign_work_unit(self, node: object) -> None:
+            put_first(self.workqueue, self.slow)
+            super()._assign_work_unit(node)
 
     @pytest.hookimpl(optionalhook=True)
     def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:

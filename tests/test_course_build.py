@@ -502,3 +502,28 @@ def test_a_chapters_notebooks_and_checks_are_scheduled_together():
     assert scheduler._split_scope("course/04_speech_commands.ipynb::Cell 12") == "chapter 04"
     assert scheduler._split_scope("tests/test_slam.py::test_x[fr079-0.061]") == \
         "tests/test_slam.py"
+
+
+def test_the_slow_scopes_are_handed_out_first_in_their_order():
+    from collections import OrderedDict
+
+    from abcwc.nbval_plugin import put_first
+
+    queue = OrderedDict.fromkeys(["chapter 01", "tests/test_a.py", "tests/test_slam.py",
+                                  "chapter 10"])
+    slow = ["chapter 10", "tests/test_follow.py", "tests/test_slam.py"]
+    handed = []
+    while queue:
+        put_first(queue, slow)
+        handed.append(queue.popitem(last=False)[0])
+    assert handed == ["chapter 10", "tests/test_slam.py", "chapter 01", "tests/test_a.py"]
+
+
+def test_the_slow_scopes_name_test_files_and_chapters(pytestconfig):
+    slow = pytestconfig.getini("slow_scopes")
+    assert slow
+    for scope in slow:
+        if scope.startswith("chapter "):
+            assert list((ROOT / "solutions").glob(f"{scope.split()[1]}_*.ipynb")), scope
+        else:
+            assert (ROOT / scope).is_file() and scope.startswith("tests/"), scope

@@ -11,15 +11,14 @@ in a fresh kernel, one test per code cell:
   end without an error (their checks print "not yet" and later cells fall back to the
   library's own functions).
 
-Kernels start with a fixed environment: this checkout of ``abcwc`` first on the path,
-matplotlib's inline backend (non-interactive; figures still become image/png outputs),
-``PYTHONHASHSEED=0``, OpenBLAS's Haswell kernels on x86-64 (:data:`BLAS_KERNELS`),
-and ``ABCWC_PORT=simavr``: a test run never talks to a real chair,
-and every real-chair cell (:func:`abcwc.hardware_chair`) runs against our firmware on a
-simulated Arduino. Where the AVR toolchain and simavr are missing (outside CI),
-``ABCWC_PORT`` is removed instead and those cells say they are skipped; under CI
-(``CI=true``) it stays set, those cells print which tools are missing (a missing device
-never crashes a cell), and the firmware's own tests fail.
+Under pytest-xdist's ``--dist loadscope`` (pyproject's addopts), a chapter's two
+notebooks and its checks' tests are one scope (:class:`ChapterScopeScheduling`): one
+worker runs them in collection order (tests, solution, student copy), so the later ones
+read the seeded results the first kept on disk (:mod:`abcwc.experiments.disk_cache`)
+instead of waiting on their lock while the other worker idles beside it. The scopes
+named by the ini option ``slow_scopes`` go out first, in its order (xdist's own order
+is by number of tests, which leaves a module of a few long tests to the end, with the
+other worker idle beside it); the rest follow in xdist's order.
 """
 
 from __future__ import annotations
@@ -27,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import os
 import platform
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -71,6 +71,11 @@ try:
     from nbval.plugin import IPyNbFile, get_sanitize_patterns
 except ImportError:  # nbval not installed: plain tests still run
     IPyNbFile = None
+try:
+    from xdist.scheduler import LoadScopeScheduling
+except ImportError:  # pytest-xdist not installed: one process runs everything
+    LoadScopeScheduling = None
+SOLUTIONS_DIR = "solutions"  # under the pytest rootdir
 
 
 @contextlib.contextmanager
@@ -125,3 +130,57 @@ if IPyNbFile is not None:
             CourseNotebook.from_parent(parent, path=file_path) if type(node) is IPyNbFile else node
             for node in collected or []
         ]
+
+
+def chapter_scope(scope: str) -> str:
+    """``scope`` (a test's node id up to its last ``::``), or ``chapter NN`` for chapter
+    NN's notebooks (``solutions/NN_x.ipynb``, ``course/NN_x.ipynb``) and its checks'
+    tests (``tests/test_checks_chNN.py``)."""
+    chapter = _CHAPTER_FILE.fullmatch(scope)
+    if chapter is None:
+        return scope
+    return f"chapter {chapter['notebook'] or chapter['checks']}"
+
+
+_CHAPTER_FILE = re.compile(rf"(?:{SOLUTIONS_DIR}|{LAX_DIR})/(?P<notebook>\d\d)_[^/]*\.ipynb"
+                           r"|tests/test_checks_ch(?P<checks>\d\d)\.py")
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addini("slow_scopes", type="linelist", default=[],
+                  help="xdist scopes (chapter_scope's names) handed out first, in order")
+
+
+def put_first(workqueue: dict[str, object], slow: list[str]) -> None:
+    """Move the first of ``slow`` still in ``workqueue`` (an OrderedDict, scope -> its
+    tests) to its front; with none left, leave it as it is."""
+    for scope in slow:
+        if scope in workqueue:
+            workqueue.move_to_end(scope, last=False)  # type: ignore[attr-defined]
+            return
+
+
+if LoadScopeScheduling is not None:
+
+    class ChapterScopeScheduling(LoadScopeScheduling):
+        """xdist's ``loadscope``, with a chapter's notebooks and checks' tests one scope
+        (:func:`chapter_scope`); its items keep their collection order (``tests/``,
+        ``solutions/``, ``course/``: pyproject's testpaths)."""
+
+        def __init__(self, config: pytest.Config, log: object = None) -> None:
+            super().__init__(config, log)
+            self.slow = [chapter_scope(scope) for scope in config.getini("slow_scopes")]
+
+        def _split_scope(self, nodeid: str) -> str:
+            return chapter_scope(super()._split_scope(nodeid))
+
+        def _assign_work_unit(self, node: object) -> None:
+            put_first(self.workqueue, self.slow)
+            super()._assign_work_unit(node)
+
+    @pytest.hookimpl(optionalhook=True)
+    def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
+        """:class:`ChapterScopeScheduling` for ``--dist loadscope``; xdist's own otherwise."""
+        if config.getvalue("dist") != "loadscope":
+            return None
+        return ChapterScopeScheduling(config, log)

@@ -143,3 +143,45 @@ def test_threshold_check_is_decided_by_more_than_one_sentence(held_out):
 ])
 def test_threshold_check_refuses(held_out, chosen, fragment, capsys):
     assert_not_yet(ch04.threshold_check(chosen), capsys, fragment)
+
+
+def test_the_synthesisers_versions_are_read_from_their_debian_packages(monkeypatch, tmp_path):
+    from abcwc.perception.speech.synthesis import DEBIAN_PACKAGES, engine_versions
+    from tests.test_speech import _need_speech_tools
+
+    _need_speech_tools()
+    versions = engine_versions()
+    assert versions is not None
+    packages = sorted(" ".join(DEBIAN_PACKAGES.values()).split())
+    assert [v.split("=")[0] for v in versions] == packages
+    assert all(v.split("=")[1] for v in versions)
+    monkeypatch.setenv("PATH", str(tmp_path))  # no dpkg-query: nothing to key a cache on
+    assert engine_versions() is None
+
+
+def test_the_held_out_decoding_is_kept_under_the_synthesisers_versions(monkeypatch):
+    """held_out_condition hands the engines' package versions and pocketsphinx's to the
+    disk-cached decoding (its key); without versions it decodes without keeping."""
+    from importlib.metadata import version
+
+    from abcwc.perception.speech import synthesis
+
+    calls = []
+
+    def decoded(snr, voices, versions):
+        calls.append(("kept", snr, voices, versions))
+        return []
+
+    decoded.__wrapped__ = lambda snr, voices, versions: calls.append(
+        ("not kept", snr, voices, versions)) or []
+    monkeypatch.setattr(ch04, "decoded_held_out", decoded)
+    monkeypatch.setattr(synthesis, "engine_versions", lambda: ("flite=9.9-1",))
+    ch04.held_out_condition.__wrapped__(20.0)
+    monkeypatch.setattr(synthesis, "engine_versions", lambda: None)
+    ch04.held_out_condition.__wrapped__(None)
+    voices = ch04.exercise_voices()
+    assert calls == [("kept", 20.0, voices, ("flite=9.9-1",
+                                              f"pocketsphinx={version('pocketsphinx')}")),
+                     ("not kept", None, voices, ())]
+    with pytest.raises(ValueError, match="snr must be one of"):
+        ch04.held_out_condition.__wrapped__(10.0)

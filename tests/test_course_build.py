@@ -484,3 +484,46 @@ def test_student_notebook_runs_to_the_end_with_not_yet_and_fallback(tmp_path, mo
     plot = nb.cells[-1].outputs
     assert [out.output_type for out in plot] == ["display_data"]
     assert "image/png" in plot[0].data
+
+
+def test_a_chapters_notebooks_and_checks_are_scheduled_together():
+    """Under ``--dist loadscope`` a chapter's two notebooks and its checks' tests are one
+    scope (one worker runs them, in collection order); every other scope is xdist's own."""
+    from abcwc.nbval_plugin import ChapterScopeScheduling, chapter_scope
+
+    for scope in ("solutions/10_the_ekf.ipynb", "course/10_the_ekf.ipynb",
+                  "tests/test_checks_ch10.py"):
+        assert chapter_scope(scope) == "chapter 10"
+    for scope in ("tests/test_slam.py", "tests/test_dwa.py::TestWindow",
+                  "tests/test_checks_ch00_ch01.py", "course/nbgrader/source/10/10.ipynb",
+                  "course/README.md", "solutions/10_the_ekf.py"):
+        assert chapter_scope(scope) == scope
+    scheduler = ChapterScopeScheduling.__new__(ChapterScopeScheduling)  # needs no workers
+    assert scheduler._split_scope("course/04_speech_commands.ipynb::Cell 12") == "chapter 04"
+    assert scheduler._split_scope("tests/test_slam.py::test_x[fr079-0.061]") == \
+        "tests/test_slam.py"
+
+
+def test_the_slow_scopes_are_handed_out_first_in_their_order():
+    from collections import OrderedDict
+
+    from abcwc.nbval_plugin import put_first
+
+    queue = OrderedDict.fromkeys(["chapter 01", "tests/test_a.py", "tests/test_slam.py",
+                                  "chapter 10"])
+    slow = ["chapter 10", "tests/test_follow.py", "tests/test_slam.py"]
+    handed = []
+    while queue:
+        put_first(queue, slow)
+        handed.append(queue.popitem(last=False)[0])
+    assert handed == ["chapter 10", "tests/test_slam.py", "chapter 01", "tests/test_a.py"]
+
+
+def test_the_slow_scopes_name_test_files_and_chapters(pytestconfig):
+    slow = pytestconfig.getini("slow_scopes")
+    assert slow
+    for scope in slow:
+        if scope.startswith("chapter "):
+            assert list((ROOT / "solutions").glob(f"{scope.split()[1]}_*.ipynb")), scope
+        else:
+            assert (ROOT / scope).is_file() and scope.startswith("tests/"), scope

@@ -38,12 +38,14 @@ from abcwc.checks.report import (
     format_value,
     numbers,
 )
+from abcwc.experiments.disk_cache import cached_on_disk
 from abcwc.perception.speech.recognizer import word_log_likelihood_ratio
 
 __all__ = [
     "BARS",
     "HELD_OUT_SEED",
     "PREDICTION_TOLERANCE",
+    "decoded_held_out",
     "held_out_condition",
     "held_out_trials",
     "prediction_check",
@@ -187,14 +189,33 @@ def _bare_recogniser():  # noqa: ANN202 - a CommandRecognizer, imported lazily
 @cache
 def held_out_condition(snr: float | None) -> list:
     """``held_out_trials`` in one condition (``snr`` None: quiet; one of ``BARS``),
-    decoded once and kept: a notebook can decode one condition per cell."""
-    from abcwc.experiments.speech_trials import HELD_OUT_DISTRACTORS, run_trials
+    decoded once and kept: a notebook can decode one condition per cell. Kept on disk
+    too (:func:`decoded_held_out`), so the tests and both copies of the notebook decode
+    it once; where the synthesisers' versions cannot be read, it is decoded each time."""
+    from importlib.metadata import version
+
+    from abcwc.perception.speech.synthesis import engine_versions
 
     if snr not in BARS:
         raise ValueError(f"snr must be one of {list(BARS)}, got {snr!r}")
+    engines = engine_versions()
+    if engines is None:
+        return decoded_held_out.__wrapped__(snr, exercise_voices(), ())
+    return decoded_held_out(snr, exercise_voices(),
+                            (*engines, f"pocketsphinx={version('pocketsphinx')}"))
+
+
+@cached_on_disk
+def decoded_held_out(snr: float | None, voices: tuple, versions: tuple[str, ...]) -> list:
+    """The house commands and the held-out sentences said in ``voices`` at ``snr`` (dB;
+    None: quiet), decoded with no verification. ``versions`` (the synthesisers' Debian
+    packages and pocketsphinx, ``package=version``) is not read: it is part of the disk
+    cache's key, as the audio and its decoding depend on them."""
+    from abcwc.experiments.speech_trials import HELD_OUT_DISTRACTORS, run_trials
+
     recogniser = _bare_recogniser()
     return run_trials(recogniser, recogniser.commands.phrases, list(HELD_OUT_DISTRACTORS),
-                      exercise_voices(), snr, seed=HELD_OUT_SEED)
+                      voices, snr, seed=HELD_OUT_SEED)
 
 
 def synthesise_held_out() -> int:

@@ -26,6 +26,7 @@ from functools import lru_cache
 import numpy as np
 
 from abcwc.checks.report import NotYet, checker, expect, expect_own, format_value
+from abcwc.experiments.disk_cache import cached_on_disk
 from abcwc.geometry import relative, wrap_angle
 from abcwc.mapping.g2o import PoseGraph
 from abcwc.mapping.posegraph import edge_errors, optimise
@@ -39,6 +40,7 @@ __all__ = [
     "prediction_check",
     "reference_edge_error",
     "reference_false_loop",
+    "surveyed_floor",
 ]
 
 
@@ -106,7 +108,19 @@ def floor_survey():
     drive of the navigator's, recorded in ``data/drives/floor_survey.csv`` and replayed,
     so that it does not change when the navigator does), its lidar scans with the wheel
     odometry as a laser log, and SLAM with and without loop closure:
-    ``(world, log, laser, with_loops, without)``."""
+    ``(world, log, laser, with_loops, without)``. Kept on disk too
+    (:func:`surveyed_floor`), so the tests and both copies of the notebook drive and map
+    it once."""
+    import os
+
+    return surveyed_floor(os.environ.get("OPENBLAS_CORETYPE"))
+
+
+@cached_on_disk
+def surveyed_floor(blas_kernels: str | None):  # noqa: ANN201 - floor_survey's tuple
+    """:func:`floor_survey`'s drive and maps. ``blas_kernels`` (``OPENBLAS_CORETYPE``)
+    is not read: it is part of the disk cache's key, as OpenBLAS's kernels sum in their
+    own orders and SLAM's loop closures follow the last bits (``abcwc.nbval_plugin``)."""
     from abcwc.behaviours.recorded import RecordedDrive
     from abcwc.estimation.odometry import odometry_from_log
     from abcwc.experiments.navigation_trial import calibrated_ekf

@@ -17,8 +17,9 @@ Two processes asking for the same key at once take turns on a lock file (one bes
 each result): the second reads what the first wrote. The folder is
 ``$ABCWC_CACHE_DIR``, else ``$XDG_CACHE_HOME/abcwc``, else ``~/.cache/abcwc``; where it
 cannot be written, the function simply runs; delete the folder to free its space
-(chapter 10's drives take about 11 MB for each version of the code). Only deterministic
-functions belong here: every random source seeded by the arguments or the constants.
+(chapter 10's drives take about 11 MB and chapter 14's survey 17 MB for each version of
+the code). Only deterministic functions belong here: every random source seeded by the
+arguments or the constants.
 """
 
 from __future__ import annotations

@@ -145,6 +145,19 @@ def espeak_available() -> bool:
     return engine_available("espeak-ng")
 
 
+def engine_versions() -> tuple[str, ...] | None:
+    """The engines' Debian packages (``DEBIAN_PACKAGES``) as ``package=version``, read
+    with ``dpkg-query``: what a voice's audio depends on besides its text and settings.
+    None where they cannot be read (no ``dpkg-query``, or a package not installed)."""
+    packages = " ".join(DEBIAN_PACKAGES.values()).split()
+    try:
+        listed = subprocess.run(["dpkg-query", "-W", "-f=${Package}=${Version}\\n", *packages],
+                                capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return tuple(sorted(listed.split()))
+
+
 def speak(text: str, voice: Voice = Voice("en-us")) -> np.ndarray:
     """``text`` spoken in ``voice``: float audio in [-1, 1] at 16 kHz. Deterministic,
     so the last 1024 are kept, as float32 (synthesis takes 10-600 ms each).

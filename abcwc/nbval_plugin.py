@@ -134,12 +134,22 @@ if IPyNbFile is not None:
 
 def chapter_scope(scope: str) -> str:
     """``scope`` (a test's node id up to its last ``::``), or ``chapter NN`` for chapter
-    NN's notebooks (``solutions/NN_x.ipynb``, ``course/NN_x.ipynb``) and its checks'
-    tests (``tests/test_checks_chNN.py``)."""
+    NN's notebooks (``solutions/NN_x.ipynb``, ``course/NN_x.ipynb``), its checks' tests
+    (``tests/test_checks_chNN.py``) and the tests that read what it keeps on disk
+    (:data:`READ_WITH_CHAPTER`)."""
+    if scope in READ_WITH_CHAPTER:
+        return f"chapter {READ_WITH_CHAPTER[scope]}"
     chapter = _CHAPTER_FILE.fullmatch(scope)
     if chapter is None:
         return scope
     return f"chapter {chapter['notebook'] or chapter['checks']}"
+
+
+READ_WITH_CHAPTER = {"tests/test_follow.py": "17", "tests/test_slam_sim.py": "14"}
+"""Test files that compute what a chapter keeps on disk, so they share its scope: the
+follower's tests drive chapter 17's lab trials
+(:func:`abcwc.experiments.follow_trial.run_trial_in`), and the simulated SLAM tests
+replay chapter 14's floor survey (:func:`abcwc.checks.ch14.floor_survey`)."""
 
 
 _CHAPTER_FILE = re.compile(rf"(?:{SOLUTIONS_DIR}|{LAX_DIR})/(?P<notebook>\d\d)_[^/]*\.ipynb"

@@ -494,6 +494,7 @@ def test_a_chapters_notebooks_and_checks_are_scheduled_together():
     for scope in ("solutions/10_the_ekf.ipynb", "course/10_the_ekf.ipynb",
                   "tests/test_checks_ch10.py"):
         assert chapter_scope(scope) == "chapter 10"
+    assert chapter_scope("tests/test_follow.py") == "chapter 17"  # the same lab trials
     for scope in ("tests/test_slam.py", "tests/test_dwa.py::TestWindow",
                   "tests/test_checks_ch00_ch01.py", "course/nbgrader/source/10/10.ipynb",
                   "course/README.md", "solutions/10_the_ekf.py"):

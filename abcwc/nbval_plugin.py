@@ -11,8 +11,19 @@ in a fresh kernel, one test per code cell:
   end without an error (their checks print "not yet" and later cells fall back to the
   library's own functions).
 
+Kernels start with a fixed environment: this checkout of ``abcwc`` first on the path,
+matplotlib's inline backend (non-interactive; figures still become image/png outputs),
+``PYTHONHASHSEED=0``, OpenBLAS's Haswell kernels on x86-64 (:data:`BLAS_KERNELS`),
+and ``ABCWC_PORT=simavr``: a test run never talks to a real chair,
+and every real-chair cell (:func:`abcwc.hardware_chair`) runs against our firmware on a
+simulated Arduino. Where the AVR toolchain and simavr are missing (outside CI),
+``ABCWC_PORT`` is removed instead and those cells say they are skipped; under CI
+(``CI=true``) it stays set, those cells print which tools are missing (a missing device
+never crashes a cell), and the firmware's own tests fail.
+
 Under pytest-xdist's ``--dist loadscope`` (pyproject's addopts), a chapter's two
-notebooks and its checks' tests are one scope (:class:`ChapterScopeScheduling`): one
+notebooks, its checks' tests and the tests that compute what it keeps on disk
+(:data:`READ_WITH_CHAPTER`) are one scope (:class:`ChapterScopeScheduling`): one
 worker runs them in collection order (tests, solution, student copy), so the later ones
 read the seeded results the first kept on disk (:mod:`abcwc.experiments.disk_cache`)
 instead of waiting on their lock while the other worker idles beside it. The scopes
@@ -173,7 +184,7 @@ def put_first(workqueue: dict[str, object], slow: list[str]) -> None:
 if LoadScopeScheduling is not None:
 
     class ChapterScopeScheduling(LoadScopeScheduling):
-        """xdist's ``loadscope``, with a chapter's notebooks and checks' tests one scope
+        """xdist's ``loadscope``, with a chapter's notebooks and tests one scope
         (:func:`chapter_scope`); its items keep their collection order (``tests/``,
         ``solutions/``, ``course/``: pyproject's testpaths)."""
 

@@ -134,7 +134,7 @@ from abcwc.behaviours.follow_trail import Trail
 from abcwc.control.safety import ClearanceCheck
 from abcwc.control.velocity import pot_command_to_twist
 from abcwc.estimation.estimator import PoseEstimator
-from abcwc.geometry import compose, transform_points, wrap_angle
+from abcwc.geometry import compose, rotation_matrix, transform_points, wrap_angle
 from abcwc.navigation.costmap import FREE_SPACE, Costmap, chair_footprint
 from abcwc.navigation.dwa import DwaPlanner
 from abcwc.navigation.people import PeopleTracker, standing_still
@@ -415,11 +415,11 @@ class TagFollower(BehaviourBase):
 
     def _walking_blobs(self, candidates: np.ndarray) -> np.ndarray:
         """(K,) whether each candidate (K, 2) is on an others' track that has walked
-        (:meth:`_walked_mask`)."""
-        walked = [t.position for t, w in zip(self.others.tracks, self._walked_mask()) if w]
+        (:meth:`_walked`)."""
+        walked = self._walked()[:, :2]
         if not len(walked) or not len(candidates):
             return np.zeros(len(candidates), dtype=bool)
-        gaps = np.hypot(*(candidates[:, None, :] - np.array(walked)[None]).transpose(2, 0, 1))
+        gaps = np.hypot(*(candidates[:, None, :] - walked[None]).transpose(2, 0, 1))
         return gaps.min(axis=1) <= self.settings.gate
 
     def _someone_else_near(self) -> bool:
@@ -901,10 +901,9 @@ class TagFollower(BehaviourBase):
         """Moving discs (M, 5) from the odom frame to base_link."""
         if not len(discs):
             return np.zeros((0, 5))
-        c, s = math.cos(self.pose.theta), math.sin(self.pose.theta)
-        to_base = np.array([[c, s], [-s, c]])
-        position = (discs[:, :2] - (self.pose.x, self.pose.y)) @ to_base.T
-        return np.column_stack([position, discs[:, 2:4] @ to_base.T, discs[:, 4]])
+        rotation = rotation_matrix(self.pose.theta)  # x R = R^T x: odom -> base_link
+        position = (discs[:, :2] - (self.pose.x, self.pose.y)) @ rotation
+        return np.column_stack([position, discs[:, 2:4] @ rotation, discs[:, 4]])
 
     def _people_in_base(self) -> tuple[np.ndarray, np.ndarray]:
         """Two (M, 5) arrays of DWA's moving discs (x, y, vx, vy, radius) in base_link:

@@ -86,14 +86,3 @@ def test_the_floor_survey_closes_loops_and_a_planted_false_loop_is_found(capsys)
     assert_not_yet(ch14.false_loop_check(ch14.reference_false_loop), capsys, "abcwc's own")
     assert_not_yet(ch14.false_loop_check(not_written), capsys, "NotImplementedError")
 
-
-def test_the_floor_survey_is_kept_under_the_blas_kernels(monkeypatch):
-    """floor_survey hands OPENBLAS_CORETYPE to the disk-cached survey (its key): a result
-    kept under other kernels, whose sums round otherwise, is not read."""
-    calls = []
-    monkeypatch.setattr(ch14, "surveyed_floor", lambda kernels: calls.append(kernels))
-    monkeypatch.setenv("OPENBLAS_CORETYPE", "Haswell")
-    ch14.floor_survey.__wrapped__()
-    monkeypatch.delenv("OPENBLAS_CORETYPE")
-    ch14.floor_survey.__wrapped__()
-    assert calls == ["Haswell", None]

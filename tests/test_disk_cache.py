@@ -75,3 +75,15 @@ def test_where_nothing_can_be_written_it_simply_runs(tmp_path, monkeypatch):
     cached(1)
     assert calls == [1, 1]
     assert disk_cache.cache_folder() == blocked / "cache"
+
+
+def test_the_key_follows_the_blas_kernels(monkeypatch):
+    """A result kept under other BLAS kernels (OPENBLAS_CORETYPE), whose sums round
+    otherwise, is not read: chapter 14's loop closures follow those last bits."""
+    monkeypatch.setenv("OPENBLAS_CORETYPE", "Haswell")
+    haswell = call_key(_drive, (4,), {})
+    assert call_key(_drive, (4,), {}) == haswell
+    monkeypatch.setenv("OPENBLAS_CORETYPE", "Prescott")
+    assert call_key(_drive, (4,), {}) != haswell
+    monkeypatch.delenv("OPENBLAS_CORETYPE")
+    assert call_key(_drive, (4,), {}) != haswell

@@ -40,7 +40,6 @@ __all__ = [
     "prediction_check",
     "reference_edge_error",
     "reference_false_loop",
-    "surveyed_floor",
 ]
 
 
@@ -103,24 +102,16 @@ def error_check(fn: Callable) -> str:
 
 
 @lru_cache(maxsize=1)
+@cached_on_disk
 def floor_survey():
     """200 s across the floor (the start to the lab, the cafeteria and back, seed 14: a
     drive of the navigator's, recorded in ``data/drives/floor_survey.csv`` and replayed,
     so that it does not change when the navigator does), its lidar scans with the wheel
     odometry as a laser log, and SLAM with and without loop closure:
     ``(world, log, laser, with_loops, without)``. Kept on disk too
-    (:func:`surveyed_floor`), so the tests and both copies of the notebook drive and map
-    it once."""
-    import os
-
-    return surveyed_floor(os.environ.get("OPENBLAS_CORETYPE"))
-
-
-@cached_on_disk
-def surveyed_floor(blas_kernels: str | None):  # noqa: ANN201 - floor_survey's tuple
-    """:func:`floor_survey`'s drive and maps. ``blas_kernels`` (``OPENBLAS_CORETYPE``)
-    is not read: it is part of the disk cache's key, as OpenBLAS's kernels sum in their
-    own orders and SLAM's loop closures follow the last bits (``abcwc.nbval_plugin``)."""
+    (:func:`~abcwc.experiments.disk_cache.cached_on_disk`, keyed also by the BLAS
+    kernels, as SLAM's loop closures follow the last bits), so the tests and both copies
+    of the notebook drive and map it once."""
     from abcwc.behaviours.recorded import RecordedDrive
     from abcwc.estimation.odometry import odometry_from_log
     from abcwc.experiments.navigation_trial import calibrated_ekf

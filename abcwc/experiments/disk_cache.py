@@ -10,6 +10,10 @@ file named by a hash of
 * the call's arguments (their ``repr``);
 * every ``.py`` file of the ``abcwc`` package and every file of its ``data`` folder
   (a change anywhere below makes new keys);
+* the BLAS kernels OpenBLAS is told to use (``OPENBLAS_CORETYPE``, which the test
+  suite's kernels set: :data:`abcwc.nbval_plugin.BLAS_KERNELS`): kernels sum in their
+  own orders, and a drive whose decisions follow the last bits (SLAM's loop closures)
+  comes out otherwise under others;
 
 and returns what the file holds, or calls the function and writes its result there
 (pickled, written to a temporary file and renamed, so a reader never sees half a file).
@@ -84,7 +88,8 @@ def call_key(function: Callable, args: tuple, kwargs: dict) -> str:
     except (OSError, TypeError):  # no source file to read: the compiled code instead
         source = repr((code.co_code, code.co_consts))
     parts = [function.__qualname__, source, repr(constants),
-             repr(args), repr(sorted(kwargs.items())), package_fingerprint()]
+             repr(args), repr(sorted(kwargs.items())), package_fingerprint(),
+             f"OPENBLAS_CORETYPE={os.environ.get('OPENBLAS_CORETYPE')}"]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:32]
 
 

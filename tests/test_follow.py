@@ -34,10 +34,15 @@ def trial(trials):
 
 def test_the_follower_keeps_a_metre_behind_ana_for_two_minutes(trials, trial):
     """The bar: 1.0 +- 0.3 m for at least 90 % of the time the tag is read in the
-    typical run (the median of three seeds), at least 75 % in every run, never touching
-    anyone or anything, and reading the tag again after every loss."""
+    typical run (the median of three seeds), at least 75 % in every run, the tag read in
+    at least 80 % of the decisions, never touching anyone or anything, and reading the
+    tag again after every loss."""
     held = [t.held() for t in trials]
     assert np.median(held) >= 0.90 and min(held) >= 0.75, held
+    # the issue's bar for the tag: read in at least 80 % of the decisions, every run
+    # (the card's marker on its middle line stays in the picture after her turns)
+    read = [float(t.seen.mean()) for t in trials]
+    assert min(read) >= 0.80, read
     assert all(t.collisions == 0 and t.closest_person > 0.05 for t in trials)
     assert trial.collisions == 0
     assert trial.closest_person > 0.05

@@ -76,19 +76,24 @@ def test_square_pose_and_cards_refuse_what_cannot_be():
         FollowCard("ana", 7, side=-0.2)
 
 
-def test_a_card_is_a_marker_and_a_code_of_the_same_size():
+def test_a_card_is_a_code_above_a_marker_on_its_middle_line():
     card = FollowCard("ana", 7, side=0.2)
     image = card.image(px_per_m=1000)
+    assert image.shape[0] == pytest.approx(card.height * 1000, rel=0.02)
     assert image.shape[1] == pytest.approx(card.width * 1000, rel=0.02)
-    assert card.marker_offset == pytest.approx(card.marker_width / 2 - card.width / 2)
+    assert card.height == pytest.approx(card.marker_width + card.qr_width)
     found = detect_aruco_markers(image)
     assert [m.marker_id for m in found] == [7]
     # drawn to scale: the marker's black square is side / width of the card's width
     assert found[0].side_px / image.shape[1] == pytest.approx(card.side / card.width,
                                                                rel=0.01)
-    assert found[0].centre[0] / image.shape[1] == pytest.approx(
-        0.5 + card.marker_offset / card.width, abs=0.005)
-    assert [c.text for c in detect_qr_codes(image)] == ["ana"]
+    # on the card's middle line, marker_drop below its centre (image rows run down)
+    assert found[0].centre[0] / image.shape[1] == pytest.approx(0.5, abs=0.005)
+    assert found[0].centre[1] / image.shape[0] == pytest.approx(
+        0.5 + card.marker_drop / card.height, abs=0.005)
+    codes = detect_qr_codes(image)
+    assert [c.text for c in codes] == ["ana"]
+    assert codes[0].centre[1] < found[0].centre[1]  # the code above the marker
 
 
 @pytest.fixture(scope="module")
@@ -98,10 +103,11 @@ def sweep():
 
 def test_the_marker_s_range_and_bearing_from_the_simulated_camera(sweep):
     """The issue's bar: range within 3 % and bearing within 1 degree wherever the tag
-    is read for its pose (a marker of MIN_POSE_SIDE_PX or more across)."""
+    is read for its pose (a marker of MIN_POSE_SIDE_PX or more across; the worst, 2.5 %,
+    is a marker 20 px across at 6 m)."""
     ranged = sweep.side_px >= MIN_POSE_SIDE_PX
     assert ranged.sum() > 40
-    assert np.abs(sweep.range_error[ranged]).max() < 0.02
+    assert np.abs(sweep.range_error[ranged]).max() < 0.03
     assert abs(np.mean(sweep.range_error[ranged])) < 0.005  # no bias left
     assert np.abs(sweep.bearing_error[sweep.found]).max() < math.radians(0.1)
     assert sweep.farthest(ranged) > 5.5  # m: the range is good to 5.5 m and more
@@ -109,11 +115,11 @@ def test_the_marker_s_range_and_bearing_from_the_simulated_camera(sweep):
 
 def test_each_tag_s_reading_range(sweep):
     """Measured, not assumed: a 0.2 m marker is found out to nearly 9 m; its QR code
-    (21 modules of 9.5 mm, about 4 px each at 1.4 m, 3 px at 1.8 m) reads to 1.0-1.8 m
-    (with each frame's noise fresh, 1.73 m), and to 1.8-2.3 m on the image enlarged
+    (21 modules of 9.5 mm, about 4 px each at 1.4 m, 2.8 px at 2 m) reads to 1.0-2.1 m
+    (here once at 2.0 m, mostly within 1.4 m), and to 1.8-2.4 m on the image enlarged
     twice."""
     assert sweep.farthest(sweep.found) > 8.0
-    assert 1.0 <= sweep.farthest(sweep.qr) <= 1.8
-    assert 1.8 <= sweep.farthest(sweep.qr_upscaled) <= 2.3
-    assert not sweep.qr[sweep.distance > 1.9].any()
+    assert 1.0 <= sweep.farthest(sweep.qr) <= 2.1
+    assert 1.8 <= sweep.farthest(sweep.qr_upscaled) <= 2.4
+    assert not sweep.qr[sweep.distance > 2.2].any()
     assert sweep.found[sweep.distance < 6.0].mean() > 0.85  # failures: half out of view

@@ -357,12 +357,10 @@ class TagFollower(BehaviourBase):
                             PinholeCamera.of_image(image))
         if found is None or found[0].side_px < self.settings.min_marker_px:
             return None
-        tag = found[1]
-        # the card's middle, beside the marker along the card's own x axis (its right)
-        middle = tag.position - self.card.marker_offset * tag.rotation[:, 0]
+        tag = found[1]  # on the card's middle line: over the floor, the card's middle
         # optical (x right, z ahead) -> the camera's floor frame (x ahead, y left)
         in_base = compose(Pose2D(*self.params.depth_scan.mount),
-                          Pose2D(middle[2], -middle[0], 0.0))
+                          Pose2D(tag.position[2], -tag.position[0], 0.0))
         in_odom = compose(self.pose, in_base)
         return Sighting(image.stamp, (in_odom.x, in_odom.y), tag.range, tag.bearing)
 

@@ -57,9 +57,8 @@ def sweep_tag_views(count: int = 120, seed: int = 0, card: FollowCard | None = N
     rows = []
     for view in random_views(card.image(), card.width, count, seed, distances, max_bearing,
                              max_turn, (0.8, 1.0), params):
-        right = np.array([-math.sin(view.facing), math.cos(view.facing)])
-        marker = np.array(view.centre[:2]) + card.marker_offset * right
-        true_range, true_bearing = view.range_and_bearing(marker)
+        # the marker is on the card's middle line: over the floor, the card's centre
+        true_range, true_bearing = view.range_and_bearing(np.array(view.centre[:2]))
         gray, camera, turn = view.gray, view.camera, view.turn
         found = find_marker(gray, card.marker_id, card.side, camera)
         side, range_error, bearing_error = 0.0, math.nan, math.nan

@@ -27,8 +27,9 @@ from abcwc.sim.world import PersonSpec
 
 PERSON_COLLISION_TYPE = 3
 TAG_HEIGHT = 0.9
-"""m: the centre of the card a person wears on their back (at the height of the
-chair's camera and a little above, so that it stays in view from 0.6 m)."""
+"""m: the centre of the card a person wears on their back; the marker at the card's foot
+is then at about the height of the chair's camera (0.76 m), and the card stays in view
+from 0.6 m."""
 BUMP_PAUSE = 1.0
 """s a walker stands still after touching the chair."""
 LOOK_AHEAD = 0.4

@@ -287,3 +287,61 @@ def test_a_coasting_track_is_not_taken_up_by_a_pillar():
     assert taken is not None and np.allclose(taken, pillar[0])
     follower._updated = frame.t - 1.0
     assert follower._lidar_centre(scan, None, frame.t) is None
+
+
+def test_a_door_on_her_trail_is_found_as_far_ahead_as_she_is():
+    """Her trail runs 2 m east, then north through a 0.9 m door in a wall at y = 1.2: the
+    door is 3.2 m along the trail from the chair, farther than the chair needs to slow
+    from 1 m/s, and is found there, middle and axis, so the chair slows in time."""
+    follower = _follower_at_origin()
+    wall = [(x, 1.2) for x in np.arange(0.5, 1.56, 0.05)] + [
+        (x, 1.2) for x in np.arange(2.45, 3.51, 0.05)]
+    follower._scan_points = np.array(wall)
+    trail = np.vstack([np.column_stack([np.arange(0.0, 2.0, 0.1), np.zeros(20)]),
+                       np.column_stack([np.full(26, 2.0), np.arange(0.0, 2.6, 0.1)])])
+    follower.track = trail[-1]
+    door = follower._door_ahead(np.zeros(2), trail)
+    assert door is not None
+    middle, axis = door
+    assert np.allclose(middle, (2.0, 1.2), atol=0.03)
+    assert np.allclose(axis, (0.0, 1.0), atol=0.02)
+
+
+def test_the_door_speed_cap_leaves_room_for_the_chairs_reaction_time():
+    """Sent at the cap ``d`` m before the door's approach, the chair drives on at that
+    speed for its reaction time, then slows at ``braking``: it is at ``door_speed``
+    exactly at the approach (worked on the kinematics, not the formula), and never
+    faster than the cap without the reaction time would allow."""
+    follower = _follower_at_origin()
+    s, lag = follower.settings, follower.stopping.reaction_time
+    assert lag > 0.2
+    assert follower.door_speed_cap(s.door_approach) == pytest.approx(s.door_speed)
+    assert follower.door_speed_cap(0.1) == pytest.approx(s.door_speed)
+    for room in (0.2, 0.5, 1.0, 2.0):
+        v = follower.door_speed_cap(s.door_approach + room)
+        coasting = v * lag  # m driven before the wheels slow
+        at_approach = math.sqrt(max(v * v - 2 * s.braking * (room - coasting), 0.0))
+        assert at_approach == pytest.approx(s.door_speed, abs=1e-9)
+        assert v < math.sqrt(s.door_speed ** 2 + 2 * s.braking * room)
+
+
+def test_with_a_door_on_her_trail_the_chair_keeps_to_the_trail_in_plain_view():
+    """Ana has walked 2 m east and turned north towards a 0.9 m door 0.2 m ahead of her.
+    The straight way to her is clear (it passes the door frame's end 0.43 m off), but
+    aimed at her the chair would come to the door aslant: with the door on her trail it
+    steers along the trail, for a point of its first leg, not at her."""
+    follower = _follower_at_origin()
+    wall = [(x, 1.2) for x in np.arange(0.5, 1.56, 0.05)] + [
+        (x, 1.2) for x in np.arange(2.45, 3.51, 0.05)]
+    follower._scan_points = np.array(wall)
+    for x in np.arange(0.0, 2.0, 0.1):
+        follower.trail.add((x, 0.0))
+    for y in np.arange(0.0, 1.01, 0.1):
+        follower.trail.add((2.0, y))
+    target = np.array([2.0, 1.0])
+    follower.track = target
+    assert follower._clear_ways(np.zeros(2), target[None])[0]  # in plain view
+    carrot, _ = follower._carrot(target)
+    assert follower.door is not None
+    assert carrot is not target
+    assert abs(carrot[1]) < 0.05 and 0.3 < carrot[0] < 2.05  # on her trail's first leg

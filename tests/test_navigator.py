@@ -11,10 +11,10 @@ import pytest
 
 from abcwc.behaviours.base import Status
 from abcwc.behaviours.navigator import Navigator
-from abcwc.geometry import wrap_angle
+from abcwc.geometry import transform_points, wrap_angle
 from abcwc.navigation.costmap import LETHAL
 from abcwc.navigation.dwa import DwaResult
-from abcwc.navigation.people import PeopleTracker
+from abcwc.navigation.people import PeopleTracker, is_straight
 from abcwc.sim import SimBase
 from abcwc.sim.world import world_from_dict
 from abcwc.types import Pose2D, Twist
@@ -429,3 +429,24 @@ def test_a_speck_the_survey_never_saw_does_not_stop_the_chair():
     assert seen_free
     assert navigator.status is Status.SUCCEEDED, navigator.failure
     assert frame.truth.collisions == 0
+
+
+def test_without_a_map_a_wall_piece_is_not_a_person():
+    """Without a map, the piece of a wall left in view beside a door (0.4 m of it) is as
+    compact as a person; the tracker tells them apart by shape: the wall's returns lie
+    on a line, a person's arc bows away from it. One candidate, on the person."""
+    person = {"name": "p", "path": [[3.0, 0.8], [3.0, 0.81]], "speed": 0.01, "radius": 0.25,
+              "loop": False}
+    world = world_from_dict({"name": "piece", "walls": [[[3.0, -1.0], [3.0, -0.6]]],
+                             "places": {"start": [0.0, 0.0, 0.0]}, "people": [person]})
+    chair = SimBase(world, seed=3, lidar=True)
+    scan = chair.step().lidar
+    sensor = Pose2D(*chair.params.lidar.mount)
+    points = transform_points(sensor, scan.points())
+    wall = points[(np.abs(points[:, 0] - 3.0) < 0.05) & (points[:, 1] < -0.5)]
+    arc = points[np.hypot(points[:, 0] - 3.0, points[:, 1] - 0.8) < 0.35]
+    assert len(wall) >= 4 and np.ptp(wall[:, 1]) > 0.3 and len(arc) >= 4
+    assert is_straight(wall) and not is_straight(arc)
+    candidates = PeopleTracker(None, None, max_extent=0.7).detect(scan, sensor)
+    assert len(candidates) == 1
+    assert np.hypot(*(candidates[0] - (3.0, 0.8))) < 0.15

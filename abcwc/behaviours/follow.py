@@ -48,15 +48,20 @@ the trail's point nearest the axle: a chair that has come off her trail would ot
 aim beside or behind itself and turn away from her), the gap measured along that way
 and the trail beyond it, and no faster
 than lets it turn the trail's corner at that point (:meth:`TagFollower._corner_speed`);
-so it goes through a door where she did instead of cutting across its frame to her. The
-aim changes between her and the trail only after the way has been clear (or not) for
+so it goes through a door where she did instead of cutting across its frame to her, and
+wherever a door lies on her trail ahead (below) it keeps to her trail even while she is
+in plain view: aimed at her, it would cut her corner and come to the door aslant.
+Otherwise the aim changes between her and the trail only after the way has been clear (or not) for
 ``settle`` decisions running (meanwhile, on the trail, it pursues the trail point
 ``lookahead`` m ahead): a way at the edge of clear would switch the aim, and the turn,
-to and fro with the scan's noise. **Door mode**: where her trail goes through a gap in
-the scan narrower than ``door_width`` (:meth:`TagFollower._door_ahead`), the chair slows
-to be at ``door_speed`` by ``door_approach`` m before the gap's middle, and from there,
-on her trail, it pursues the gap's axis instead, lined up before it enters, as the
-navigator's door mode does.
+to and fro with the scan's noise. **Door mode**: where her trail, anywhere between the
+chair and her, goes through a gap in the scan narrower than ``door_width``
+(:meth:`TagFollower._door_ahead`), the chair slows to be at ``door_speed`` by
+``door_approach`` m before the gap's middle, its reaction time counted
+(:meth:`TagFollower.door_speed_cap`): whoever comes out of a door is hidden behind its
+wall, or behind her, until the chair is nearly there. From there, on her trail, it
+pursues the gap's axis instead, lined up before it enters, as the navigator's door
+mode does.
 
 **Range and bearing.** With ``range`` and ``alpha`` the person's distance and bearing
 from the chair's camera::
@@ -517,9 +522,8 @@ class TagFollower(BehaviourBase):
             along -= math.hypot(camera.x - self.pose.x, camera.y - self.pose.y)
             cap = self._corner_speed(carrot)
         if self.door is not None:  # slow enough to be at door_speed by the approach
-            to_door = math.hypot(*(self.door[0] - (self.pose.x, self.pose.y)))
-            cap = min(cap, math.sqrt(s.door_speed ** 2 + 2 * s.braking
-                                     * max(to_door - s.door_approach, 0.0)))
+            cap = min(cap, self.door_speed_cap(
+                math.hypot(*(self.door[0] - (self.pose.x, self.pose.y)))))
         dx, dy = carrot[0] - origin[0], carrot[1] - origin[1]
         reach = max(math.hypot(dx, dy), 1e-9)
         bearing = wrap_angle(math.atan2(dy, dx) - origin[2])
@@ -530,6 +534,21 @@ class TagFollower(BehaviourBase):
                              "(v m/s, w rad/s)")
         return Twist(min(max(float(v), 0.0), s.max_speed, cap),
                      min(max(float(w), -s.max_turn_rate), s.max_turn_rate))
+
+    def door_speed_cap(self, to_door: float) -> float:
+        """m/s: the fastest the chair may be sent with its axle ``to_door`` m from a
+        door's middle and still be at ``door_speed`` by ``door_approach`` m before it:
+        the command takes the safety filter's reaction time ``T`` to act (sensing,
+        command delay, the wheels' lag) and then slows at ``braking`` ``b``, so, over
+        the ``d = to_door - door_approach`` m left, ``v T + (v^2 - door_speed^2) /
+        (2 b) = d``: ``v = -b T + sqrt((b T)^2 + 2 b d + door_speed^2)``. Someone
+        coming out of the door, unseen behind its wall (or behind her) until then, is
+        met at a speed the chair can stop from."""
+        s = self.settings
+        b, lag = s.braking, self.stopping.reaction_time
+        room = max(to_door - s.door_approach, 0.0)
+        return max(s.door_speed, -b * lag + math.sqrt((b * lag) ** 2 + 2 * b * room
+                                                       + s.door_speed ** 2))
 
     def _carrot(self, target: np.ndarray) -> tuple[np.ndarray, float]:
         """The point to steer for and the length (m) of the way to ``target`` through
@@ -556,6 +575,10 @@ class TagFollower(BehaviourBase):
             self._unsettled = 0
         s = self.settings
         self.door = self._door_ahead(pivot, ahead)  # for the speed, in view of her or not
+        if self.door is not None and not self._on_trail:
+            # a door on her way: along her trail even in view of her (aimed at her, the
+            # chair cuts her corner and comes to the door aslant, to wedge in its mouth)
+            self._on_trail, self._unsettled = True, 0
         if not self._on_trail:
             return target, straight
         if self.door is not None and math.hypot(*(pivot - self.door[0])) <= (
@@ -585,8 +608,8 @@ class TagFollower(BehaviourBase):
                     ) -> tuple[np.ndarray, np.ndarray] | None:
         """Door mode (the navigator's, :meth:`~abcwc.behaviours.navigator.Navigator.
         _through_doors`, on the scan): the first gap narrower than ``door_width`` that
-        the trail ``ahead`` (odom, m, from the point nearest the axle ``pivot``) goes
-        through within reach, as ``(middle, axis)``: the middle between the two nearest
+        the trail ``ahead`` (odom, m, from the point nearest the axle ``pivot``, up to
+        her) goes through, as ``(middle, axis)``: the middle between the two nearest
         returns either side of the trail there (within 0.3 m along it), and the unit way
         through, at right angles to the line between them; None where there is none,
         or once the axle is ``lookahead`` m past the middle. From ``door_approach +
@@ -596,10 +619,8 @@ class TagFollower(BehaviourBase):
         s = self.settings
         if self._scan_points is None or len(ahead) < 2:
             return None
-        reach = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(ahead, axis=0).T))])
-        path = ahead[reach <= s.door_approach + 2 * s.lookahead + 0.5]
-        if len(path) < 2:
-            return None
+        path = ahead  # all of it, up to her: a door found late is met too fast
+        reach = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])
         tangent = np.gradient(path, axis=0)
         tangent /= np.maximum(np.hypot(*tangent.T), 1e-9)[:, None]
         points = self._scan_points

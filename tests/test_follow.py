@@ -345,3 +345,79 @@ def test_with_a_door_on_her_trail_the_chair_keeps_to_the_trail_in_plain_view():
     assert follower.door is not None
     assert carrot is not target
     assert abs(carrot[1]) < 0.05 and 0.3 < carrot[0] < 2.05  # on her trail's first leg
+
+
+def test_blocked_for_seconds_on_the_spot_the_follower_hands_over_to_the_navigator():
+    """Blocked decisions count towards ``hand_over_after`` only while the chair has not
+    moved ``progress`` m: 2.9 s blocked is not yet enough, 3 s is; moving 0.3 m starts
+    the count again."""
+    follower = _follower_at_origin()
+    follower.track = np.array([3.0, 0.0])
+    follower.state = "blocked"
+    t = 0.0
+    for _ in range(29):
+        t += 0.1
+        assert not follower._stuck(t)
+    assert follower._stuck(t + 0.1)
+    follower.pose = Pose2D(0.3, 0.0, 0.0)
+    assert not follower._stuck(t + 0.2)
+
+
+def two_rooms_world() -> object:
+    """Two rooms, 4 x 6 m each, joined only by a 1 m door at the far (north) end of the
+    wall between them; the chair in the west room facing the wall."""
+    return world_from_dict({
+        "name": "two rooms", "walls": [
+            [[0, 0], [8, 0], [8, 6], [0, 6], [0, 0]], [[4, 0], [4, 4.5]], [[4, 5.5], [4, 6]]],
+        "places": {"start": [1.5, 1.5, 0.0]}, "people": []})
+
+
+def test_the_hand_over_drives_round_through_the_only_door_on_the_map_of_its_scans():
+    """The hand-over's map holds only what the chair's scans saw from its start. Sent to
+    a point behind the wall, 4.5 m ahead, the navigator on that map plans through the
+    door at the wall's far end (the cells behind the wall are unknown, free to plan) and
+    gets there, touching nothing."""
+    from abcwc.behaviours.follow_handover import HandOver
+
+    chair = SimBase(two_rooms_world(), lidar=True)
+    hand_over = HandOver(chair.params)
+    frame = chair.read()
+    for _ in range(10):
+        frame = chair.step()
+    start = chair.pose  # odom = the world here
+    hand_over.lay(frame.readings[LIDAR_FRAME], compose(start, Pose2D(*chair.params.lidar.mount)))
+    assert hand_over.start(frame.t, start, np.array([[6.0, 1.5]])) is None
+    ys = []
+    for _ in range(round(60.0 / chair.period)):
+        hand_over.observe(frame)
+        chair.send(hand_over.command, frame.t)
+        frame = chair.step()
+        ys.append(chair.pose.y)
+        if hand_over.status is not Status.RUNNING:
+            break
+    assert hand_over.status is Status.SUCCEEDED, hand_over.navigator.failure
+    assert chair.collisions == 0
+    assert math.hypot(chair.pose.x - 6.0, chair.pose.y - 1.5) < 0.3
+    assert max(ys) > 4.3  # through the door, the only way
+    hand_over.end(frame.t, "reached")
+    assert not hand_over.active and hand_over.outcomes[-1][2] == "reached"
+
+
+def test_the_hand_over_refuses_goals_it_cannot_stand_on():
+    """Goals inside a wall, or off the map, are passed over for the next one; with none
+    left nothing is handed over, and the reason says so."""
+    from abcwc.behaviours.follow_handover import HandOver
+
+    chair = SimBase(two_rooms_world(), lidar=True)
+    hand_over = HandOver(chair.params)
+    assert hand_over.start(0.0, chair.pose, np.array([[6.0, 1.5]])) == "no map yet"
+    frame = chair.step()
+    sensor = compose(chair.pose, Pose2D(*chair.params.lidar.mount))
+    hand_over.lay(frame.readings[LIDAR_FRAME], sensor)
+    assert hand_over.start(0.0, chair.pose, np.array([[4.0, 2.0], [90.0, 2.0]])) == (
+        "no goal the chair can stand on")
+    assert not hand_over.active
+    assert hand_over.start(0.0, chair.pose, np.array([[4.0, 2.0], [2.5, 3.0]])) is None
+    assert hand_over.goal == (2.5, 3.0)
+    with pytest.raises(ValueError, match="reach"):
+        HandOver(chair.params, reach=math.inf)

@@ -123,6 +123,15 @@ When someone other than her stands ahead of the axle within a person's width of 
 chair (:meth:`TagFollower._someone_in_the_way`: at a door, someone coming out whom the
 chair blocks, and who waits for it), it backs off ``give_way`` m instead, out of the
 door's mouth, so that they can pass.
+
+**Hand-over.** Blocked (or backing off) for ``hand_over_after`` s, counted while the
+chair has not moved ``progress`` m, the chair hands over to the navigator
+(:mod:`abcwc.behaviours.follow_handover`): a :class:`~abcwc.behaviours.navigator.
+Navigator` on the map of everything its scans have seen (people left out), sent to her
+last-seen point, or the nearest point back along her trail it can stand on, to find a
+way round with its plan, door mode and recoveries. The follower takes over again when
+the tag is read with the straight way to her clear, or when the navigator is there
+(then, if she is not in sight, it looks for her as when lost) or has failed.
 """
 
 from __future__ import annotations
@@ -133,7 +142,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from abcwc.behaviours.base import BehaviourBase
+from abcwc.behaviours.base import BehaviourBase, Status
+from abcwc.behaviours.follow_handover import HandOver
 from abcwc.behaviours.follow_identity import IdentityGate
 from abcwc.behaviours.follow_trail import Trail
 from abcwc.control.safety import ClearanceCheck
@@ -194,6 +204,9 @@ class FollowSettings:
     back_off_distance: float = 0.3  # m
     back_off_speed: float = 0.2  # m/s
     give_way: float = 1.0  # m backed off when someone else stands in the way
+    hand_over_after: float = 3.0  # s blocked, the chair not ``progress`` m on: navigator
+    progress: float = 0.3  # m the chair must move for its blocked time to start again
+    map_reach: float = 25.0  # m each way from the first scan that its map covers
     people_horizon: float = 2.0  # s others' paths are predicted for
     people_margin: float = 0.1  # m kept from others' predicted discs
     walked: float = 0.5  # m a blob must move to count as a walking person
@@ -234,7 +247,7 @@ class TagFollower(BehaviourBase):
                      "lost_after", "predict_for", "search_turn_rate", "local_size", "seek_for",
                      "braking", "lookahead", "trail_spacing", "patience",
                      "back_off_distance", "back_off_speed", "door_width", "door_approach",
-                     "door_speed"):
+                     "door_speed", "hand_over_after", "progress", "map_reach"):
             value = getattr(s, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
@@ -283,11 +296,17 @@ class TagFollower(BehaviourBase):
         self.others = PeopleTracker(None, None, max_extent=self.settings.max_extent,
                                     person_radius=self.settings.person_radius)
         self.driven_at = Twist(0.0, 0.0)  # what the pots drive the chair at, each decision
+        self.hand_over = HandOver(self.params, self.settings.map_reach)
+        self._progress: tuple[float, float, float] | None = None  # t, x, y last moved on
+        self._blocked_for = 0.0  # s blocked since then
+        self._masked: tuple[float, float, LaserScan] | None = None  # (stamp, t, scan)
 
     # ---------------------------------------------------------------- every frame
     def observe(self, frame: SensorFrame) -> None:
         self.estimator.observe(frame)
         self.pose = self.estimator.pose
+        if self.running:
+            self.hand_over.observe(frame)  # the navigator, while handed over
 
     # ---------------------------------------------------------------- 10 Hz
     def update(self, frame: SensorFrame) -> Twist:
@@ -306,21 +325,18 @@ class TagFollower(BehaviourBase):
             self.sightings.append(seen)
             named = self._centre_behind(seen.position)
             if self.track is None or np.hypot(*(named - self.track)) > s.gate:
-                # no track yet, or it was on someone else: start again from the tag,
-                # and forget a trail that may be someone else's
-                self.track, self.velocity = named, np.zeros(2)
-                self._history = []
-                self._updated = -math.inf
-                self.trail.clear()
+                self._start_again_from(named)
             measured.append(named)
             self._tag_read = frame.t
             self._doubted = False
         scan = frame.readings.get(LIDAR_FRAME)
+        new_scan = None
         if isinstance(scan, LaserScan) and scan.stamp > self._last_scan:
             self._last_scan = scan.stamp
             sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
             self.others.update(scan, sensor, scan.stamp)
             self._scan_points = transform_points(sensor, scan.points())
+            new_scan = scan
             if self.track is not None and frame.t - self._tag_read <= s.trust_lidar_for:
                 centre = self._lidar_centre(scan, named, frame.t)
                 if centre is not None:
@@ -333,6 +349,16 @@ class TagFollower(BehaviourBase):
                 self.trail.add(self.track)
         if len(self.trail):
             self.trail.passed((self.pose.x, self.pose.y))
+        if new_scan is not None:  # into the map the navigator is handed (people out)
+            self.hand_over.lay(self._without_people(new_scan, frame.t),
+                               compose(self.pose, Pose2D(*self.params.lidar.mount)))
+        if self.hand_over.active:
+            command = self._handed_over(frame, seen is not None)
+            if command is not None:
+                self.log.append((frame.t, seen.range if seen else math.nan,
+                                 seen.bearing if seen else math.nan, command.v, command.w,
+                                 self.state))
+                return command
         if self.track is None:
             wanted = self._search(frame, 1.0)
         elif frame.t - self._updated <= s.lost_after:
@@ -351,6 +377,8 @@ class TagFollower(BehaviourBase):
             self._searching = True
             wanted = self._search(frame, self._side)
         command = self._clear_of_obstacles(frame, wanted)
+        if self._stuck(frame.t):
+            command = self._hand_over(frame)
         self.log.append((frame.t, seen.range if seen else math.nan,
                          seen.bearing if seen else math.nan, command.v, command.w, self.state))
         return command
@@ -379,6 +407,15 @@ class TagFollower(BehaviourBase):
         away = np.array([point[0] - camera.x, point[1] - camera.y])
         away /= max(float(np.hypot(*away)), 1e-9)
         return np.asarray(point) + self.settings.person_radius * away
+
+    def _start_again_from(self, named: np.ndarray) -> None:
+        """The tag names her at ``named`` (odom, m) more than ``gate`` from her track (or
+        there is no track yet): the track was on someone else, or lagged; it starts again
+        from the tag, and the trail, which may be someone else's, is forgotten."""
+        self.track, self.velocity = np.asarray(named, dtype=float), np.zeros(2)
+        self._history = []
+        self._updated = -math.inf
+        self.trail.clear()
 
     def _lidar_centre(self, scan: LaserScan, named: np.ndarray | None, now: float
                       ) -> np.ndarray | None:
@@ -759,18 +796,7 @@ class TagFollower(BehaviourBase):
         ahead, alongside = self._people_in_base()
         # the person followed and the others walking are moving discs, judged as such
         # (below), not walls: their returns leave the map (as the navigator's do)
-        sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
-        theirs = scan.hits()
-        ends = transform_points(sensor, scan.points())
-        walking = self._walked()[:, :2]
-        if len(walking):
-            theirs[theirs] = (np.hypot(*(ends[:, None, :] - walking[None]).transpose(2, 0, 1))
-                              <= s.person_radius + 0.1).any(axis=1)
-        else:
-            theirs[:] = False
-        if self.track is not None and self._updated >= frame.t - s.lost_after:
-            theirs[scan.hits()] |= np.hypot(*(ends - self.track).T) <= s.gate
-        scan = replace(scan, ranges=np.where(theirs, np.nan, scan.ranges))
+        scan = self._without_people(scan, frame.t)
         local = Costmap.rolling_window(Pose2D(), s.local_size, 0.05, default=FREE_SPACE)
         local.add_scan(scan, self.params.lidar.mount, obstacle_range=s.local_size / 2,
                        raytrace_range=s.local_size / 2)
@@ -817,6 +843,80 @@ class TagFollower(BehaviourBase):
         if best < 0:
             return Twist(0.0, 0.0)
         return Twist(float(samples[best, 0]), float(samples[best, 1]))
+
+    def _without_people(self, scan: LaserScan, now: float) -> LaserScan:
+        """``scan`` with the returns of the people tracked left out (NaN): those within
+        ``person_radius + 0.1`` m of an others' track that has walked, and those within
+        ``gate`` of her track while it is fresh. They are moving discs, judged as such,
+        not walls (as the navigator's people are). Worked out once a decision."""
+        if self._masked is not None and self._masked[:2] == (scan.stamp, now):
+            return self._masked[2]
+        s = self.settings
+        sensor = compose(self.pose, Pose2D(*self.params.lidar.mount))
+        theirs = scan.hits()
+        ends = transform_points(sensor, scan.points())
+        walking = self._walked()[:, :2]
+        if len(walking):
+            theirs[theirs] = (np.hypot(*(ends[:, None, :] - walking[None]).transpose(2, 0, 1))
+                              <= s.person_radius + 0.1).any(axis=1)
+        else:
+            theirs[:] = False
+        if self.track is not None and self._updated >= now - s.lost_after:
+            theirs[scan.hits()] |= np.hypot(*(ends - self.track).T) <= s.gate
+        masked = replace(scan, ranges=np.where(theirs, np.nan, scan.ranges))
+        self._masked = (scan.stamp, now, masked)
+        return masked
+
+    def _stuck(self, now: float) -> bool:
+        """Whether the chair has been blocked or backing off for ``hand_over_after`` s
+        (decisions counted) since it last moved ``progress`` m: her trail is blocked, and
+        the navigator is to find a way round (:meth:`_hand_over`)."""
+        s = self.settings
+        here = (self.pose.x, self.pose.y)
+        if self._progress is None or math.hypot(here[0] - self._progress[1],
+                                                here[1] - self._progress[2]) >= s.progress:
+            self._progress, self._blocked_for = (now, *here), 0.0
+        if self.state in ("blocked", "backing off"):
+            self._blocked_for += 1.0 / self.rate_hz
+        return self.track is not None and self._blocked_for >= s.hand_over_after
+
+    def _hand_over(self, frame: SensorFrame) -> Twist:
+        """Hand over to the navigator (:class:`~abcwc.behaviours.follow_handover.
+        HandOver`), to her last-seen point, or failing that the first of her trail's
+        points back from there, more than ``distance`` m from the chair, that it can
+        stand on; a stop while it starts (its first command comes with the next
+        frame)."""
+        assert self.track is not None
+        s = self.settings
+        self._progress, self._blocked_for = None, 0.0
+        pivot = np.array([self.pose.x, self.pose.y])
+        back = self.trail.ahead_of((float(pivot[0]), float(pivot[1])))[::-1]
+        goals = np.vstack([self.track[None], back.reshape(-1, 2)])
+        goals = goals[np.hypot(*(goals - pivot).T) > s.distance]
+        if self.hand_over.start(frame.t, self.pose, goals) is not None:
+            return Twist(0.0, 0.0)  # no way to hand over: the follower's own recovery
+        self._backing, self._blocked_since = None, None
+        self.state = "navigating to where she was last seen"
+        return Twist(0.0, 0.0)
+
+    def _handed_over(self, frame: SensorFrame, seen: bool) -> Twist | None:
+        """While handed over: the navigator's command, or None once the follower takes
+        over again: the tag read with the straight way to her clear, or the navigator
+        done (there, or failed: then the follower looks for her as when lost)."""
+        assert self.track is not None
+        pivot = np.array([self.pose.x, self.pose.y])
+        if seen and self._clear_ways(pivot, self.track[None])[0]:
+            self.hand_over.end(frame.t, "she was seen with the way to her clear")
+            return None
+        status = self.hand_over.status
+        if status is Status.SUCCEEDED:
+            self.hand_over.end(frame.t, "reached")
+            return None
+        if status is Status.FAILED:
+            self.hand_over.end(frame.t, f"failed: {self.hand_over.failure}")
+            return None
+        self.state = "navigating to where she was last seen"
+        return self.hand_over.command
 
     def _clear_of_people(self, samples: np.ndarray, ahead: np.ndarray,
                          alongside: np.ndarray) -> np.ndarray:

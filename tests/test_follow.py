@@ -8,9 +8,15 @@ import pytest
 
 from abcwc.behaviours.base import Status
 from abcwc.behaviours.follow import FollowSettings, TagFollower
+from abcwc.behaviours.follow_handover import HandOver
 from abcwc.behaviours.follow_identity import IdentityGate
 from abcwc.estimation.gyro import GyroOdometry
-from abcwc.experiments.follow_trial import run_follow_trial, run_trial_in
+from abcwc.experiments.follow_trial import (
+    hand_over_demo,
+    run_follow_trial,
+    run_trial_in,
+    two_rooms_world,
+)
 from abcwc.geometry import compose
 from abcwc.params import default_params
 from abcwc.paths import data_dir
@@ -363,51 +369,22 @@ def test_blocked_for_seconds_on_the_spot_the_follower_hands_over_to_the_navigato
     assert not follower._stuck(t + 0.2)
 
 
-def two_rooms_world() -> object:
-    """Two rooms, 4 x 6 m each, joined only by a 1 m door at the far (north) end of the
-    wall between them; the chair in the west room facing the wall."""
-    return world_from_dict({
-        "name": "two rooms", "walls": [
-            [[0, 0], [8, 0], [8, 6], [0, 6], [0, 0]], [[4, 0], [4, 4.5]], [[4, 5.5], [4, 6]]],
-        "places": {"start": [1.5, 1.5, 0.0]}, "people": []})
-
-
 def test_the_hand_over_drives_round_through_the_only_door_on_the_map_of_its_scans():
     """The hand-over's map holds only what the chair's scans saw from its start. Sent to
     a point behind the wall, 4.5 m ahead, the navigator on that map plans through the
     door at the wall's far end (the cells behind the wall are unknown, free to plan) and
     gets there, touching nothing."""
-    from abcwc.behaviours.follow_handover import HandOver
-
-    chair = SimBase(two_rooms_world(), lidar=True)
-    hand_over = HandOver(chair.params)
-    frame = chair.read()
-    for _ in range(10):
-        frame = chair.step()
-    start = chair.pose  # odom = the world here
-    hand_over.lay(frame.readings[LIDAR_FRAME], compose(start, Pose2D(*chair.params.lidar.mount)))
-    assert hand_over.start(frame.t, start, np.array([[6.0, 1.5]])) is None
-    ys = []
-    for _ in range(round(60.0 / chair.period)):
-        hand_over.observe(frame)
-        chair.send(hand_over.command, frame.t)
-        frame = chair.step()
-        ys.append(chair.pose.y)
-        if hand_over.status is not Status.RUNNING:
-            break
-    assert hand_over.status is Status.SUCCEEDED, hand_over.navigator.failure
-    assert chair.collisions == 0
-    assert math.hypot(chair.pose.x - 6.0, chair.pose.y - 1.5) < 0.3
-    assert max(ys) > 4.3  # through the door, the only way
-    hand_over.end(frame.t, "reached")
-    assert not hand_over.active and hand_over.outcomes[-1][2] == "reached"
+    demo = hand_over_demo(goal=(6.0, 1.5))
+    assert demo.status == "succeeded"
+    assert demo.collisions == 0
+    assert math.hypot(demo.track[-1, 0] - 6.0, demo.track[-1, 1] - 1.5) < 0.3
+    assert demo.plan[:, 1].max() > 4.5 and demo.track[:, 1].max() > 4.3  # the only door
+    assert demo.grid.known().sum() > 1000  # the one scan
 
 
 def test_the_hand_over_refuses_goals_it_cannot_stand_on():
     """Goals inside a wall, or off the map, are passed over for the next one; with none
     left nothing is handed over, and the reason says so."""
-    from abcwc.behaviours.follow_handover import HandOver
-
     chair = SimBase(two_rooms_world(), lidar=True)
     hand_over = HandOver(chair.params)
     assert hand_over.start(0.0, chair.pose, np.array([[6.0, 1.5]])) == "no map yet"

@@ -22,6 +22,11 @@ nothing in the follower is set for this building). The simulator's ground truth 
 
 ``abcwc followtrial`` runs both trials on three seeds, with A.13's follower on the same
 walks (:func:`run_trial_in`, :func:`trials_table`).
+
+:func:`hand_over_demo` shows the follower's hand-over to the navigator on its own: two
+rooms joined by one door at the far end of the wall between them, a map of the one scan
+the chair took where it stands, and the navigator sent behind the wall
+(:class:`~abcwc.behaviours.follow_handover.HandOver`).
 """
 
 from __future__ import annotations
@@ -32,15 +37,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from abcwc.behaviours.base import Status
 from abcwc.behaviours.follow import FollowLaw, FollowSettings, TagFollower, ThesisFollower
+from abcwc.behaviours.follow_handover import HandOver
 from abcwc.estimation.gyro import GyroOdometry
 from abcwc.experiments.disk_cache import cached_on_disk
 from abcwc.experiments.navigation_trial import gap_to_people
 from abcwc.geometry import compose, transform_points
+from abcwc.mapping.grid import OccupancyGrid
 from abcwc.paths import data_dir
 from abcwc.sim import SimBase
 from abcwc.sim.people import circles_of
 from abcwc.sim.world import World, world_from_dict
+from abcwc.types import LIDAR_FRAME, Pose2D
 
 ANA_PATH = [[2.7, 1.4], [5.2, 1.1], [8.7, 1.0], [8.8, 3.6], [5.4, 3.9], [5.3, 6.8],
             [2.0, 6.8], [1.6, 3.5]]
@@ -239,6 +248,69 @@ def trials_table(results: dict[tuple[str, str, int], FollowResult]) -> str:
     return "\n".join(lines)
 
 
+def two_rooms_world() -> World:
+    """Two rooms, 4 x 6 m each, joined only by a 1 m door at the north end of the wall
+    between them (x = 4 m, the door from y = 4.5 to 5.5 m); the chair in the west room
+    at (1.5, 1.5), facing the wall."""
+    return world_from_dict({
+        "name": "two rooms", "description": "Two rooms joined by one door.", "walls": [
+            [[0, 0], [8, 0], [8, 6], [0, 6], [0, 0]], [[4, 0], [4, 4.5]], [[4, 5.5], [4, 6]]],
+        "places": {"start": [1.5, 1.5, 0.0]}, "people": []})
+
+
+@dataclass
+class HandOverDemo:
+    """What :func:`hand_over_demo` drove: the map handed over (one scan), the
+    navigator's first plan (K, 2) m, the chair's true track (N, 3), the goal (m), the
+    seconds it took, how it ended and the contacts."""
+
+    grid: OccupancyGrid  # the map handed over
+    plan: np.ndarray
+    track: np.ndarray
+    goal: tuple[float, float]
+    seconds: float
+    status: str
+    collisions: int
+
+    def summary(self) -> str:
+        end = self.track[-1]
+        return (f"the navigator {self.status} in {self.seconds:.1f} s, "
+                f"{math.hypot(end[0] - self.goal[0], end[1] - self.goal[1]):.2f} m from "
+                f"the goal, through the door (highest y {self.track[:, 1].max():.2f} m); "
+                f"contacts {self.collisions}")
+
+
+def hand_over_demo(goal: tuple[float, float] = (6.0, 1.5), seconds: float = 60.0,
+                   seed: int = 0) -> HandOverDemo:
+    """The hand-over on its own (module notes): in :func:`two_rooms_world`, the map of
+    the chair's first scan handed to the navigator, sent to ``goal`` behind the wall;
+    driven until it ends or ``seconds`` have passed."""
+    chair = SimBase(two_rooms_world(), seed=seed, lidar=True)
+    hand_over = HandOver(chair.params)
+    frame = chair.read()
+    while LIDAR_FRAME not in frame.readings:
+        frame = chair.step()
+    start = chair.pose  # the odom frame is the world's here: the chair starts at rest
+    sensor = compose(start, Pose2D(*chair.params.lidar.mount))
+    hand_over.lay(frame.readings[LIDAR_FRAME], sensor)
+    why_not = hand_over.start(frame.t, start, np.array([goal], dtype=float))
+    if why_not is not None:
+        raise ValueError(f"the hand-over could not start: {why_not}")
+    assert hand_over.navigator is not None and hand_over.navigator.path is not None
+    plan = hand_over.navigator.path.points.copy()
+    began, track = frame.t, [chair.pose.as_array()]
+    while hand_over.status is Status.RUNNING and frame.t - began < seconds:
+        hand_over.observe(frame)
+        chair.send(hand_over.command, frame.t)
+        frame = chair.step()
+        track.append(chair.pose.as_array())
+    status = hand_over.status.value if hand_over.status is not None else "ended"
+    assert hand_over.grid is not None
+    return HandOverDemo(hand_over.grid, plan, np.array(track), goal, frame.t - began,
+                        status, chair.collisions)
+
+
 __all__ = ["ANA_PATH", "BEN_PATH", "BUILDING_ANA_PATH", "BUILDING_SECONDS", "CARL_PATH",
-           "DORA_PATH", "TRIAL_WORLDS", "FollowResult", "building_follow_world",
-           "follow_world", "run_follow_trial", "run_trial_in", "trials_table"]
+           "DORA_PATH", "TRIAL_WORLDS", "FollowResult", "HandOverDemo", "building_follow_world",
+           "follow_world", "hand_over_demo", "run_follow_trial", "run_trial_in",
+           "trials_table", "two_rooms_world"]

@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from abcwc.experiments.follow_trial import FollowResult
+from abcwc.experiments.follow_trial import FollowResult, HandOverDemo
 from abcwc.experiments.tag_sweep import TagSweep
 from abcwc.perception.tags import MIN_POSE_SIDE_PX, TagDetection
 from abcwc.viz._common import new_axes
@@ -91,4 +91,26 @@ def plot_follow_runs(runs: Mapping[str, FollowResult], distance: float = 1.0,
     return fig
 
 
-__all__ = ["plot_camera_view", "plot_follow_runs", "plot_tag_sweep"]
+def plot_hand_over(demo: HandOverDemo, ax: Axes | None = None, margin: float = 0.8) -> Axes:
+    """The map the follower handed over (walls black, free white, unknown grey), the
+    navigator's plan on it (dashed), the route the chair drove (the simulator's truth)
+    and the goal; cropped to what the route and the seen cells cover, plus ``margin``
+    m."""
+    from abcwc.types import Pose2D
+    from abcwc.viz.report import plot_map_and_route
+
+    ax = plot_map_and_route(demo.grid, demo.track, places={"goal": Pose2D(*demo.goal)},
+                            ax=ax)
+    ax.plot(*demo.plan.T, "--", color="tab:orange", linewidth=1.5, label="the first plan")
+    grid = demo.grid
+    rows, cols = np.nonzero(grid.known())
+    seen = grid.cell_to_world(rows, cols)
+    points = np.vstack([seen, demo.track[:, :2], demo.plan])
+    low, high = points.min(axis=0) - margin, points.max(axis=0) + margin
+    ax.set(xlim=(low[0], high[0]), ylim=(low[1], high[1]),
+           title="the map of one scan, handed to the navigator")
+    ax.legend(loc="lower right", fontsize=8, framealpha=0.85)
+    return ax
+
+
+__all__ = ["plot_camera_view", "plot_follow_runs", "plot_hand_over", "plot_tag_sweep"]

@@ -39,6 +39,7 @@ pixel's own path. At 0.4 rad/s and 30 ms that is 7 px; at 0.5 m/s a sign 2 m ahe
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -347,20 +348,26 @@ def motion_blur(image: np.ndarray, camera: PinholeCamera, depth: np.ndarray | No
     if abs(along) > 1e-4:
         if depth is None:
             raise ValueError("the blur of driving ahead needs each pixel's depth")
-        rows, cols = image.shape[:2]
         z = depth
         with np.errstate(divide="ignore", invalid="ignore"):
-            grow = np.where(np.isfinite(z) & (z > 0.05), along / z, 0.0).astype(np.float32)
-        u, vv = np.meshgrid(np.arange(cols, dtype=np.float32),
-                            np.arange(rows, dtype=np.float32))
-        du, dv = (u - np.float32(camera.cx)) * grow, (vv - np.float32(camera.cy)) * grow
-        longest = float(np.hypot(du, dv).max())
+            grow = np.where(np.isfinite(z) & (z > 0.05), along / z,
+                            0.0).astype(np.float32, copy=False)
+        u, vv, from_u, from_v = _pixel_grid(*image.shape[:2], camera.cx, camera.cy)
+        du, dv = from_u * grow, from_v * grow
+        # the longest path (px): hypot only where the square of it may be the greatest
+        # (float32 squares are within a few parts in 10^7 of it)
+        square = du * du + dv * dv
+        near_top = square >= square.max() * np.float32(1 - 1e-5)
+        longest = float(np.hypot(du[near_top], dv[near_top]).max())
         samples = int(np.clip(math.ceil(longest) + 1, 3, max_samples))
         total = np.zeros_like(image)
+        map_u, map_v = np.empty_like(du), np.empty_like(dv)
         for t in np.linspace(-0.5, 0.5, samples, dtype=np.float32):
-            total += cv2.remap(image, u + t * du, vv + t * dv, cv2.INTER_LINEAR,
+            np.add(u, np.multiply(t, du, out=map_u), out=map_u)
+            np.add(vv, np.multiply(t, dv, out=map_v), out=map_v)
+            total += cv2.remap(image, map_u, map_v, cv2.INTER_LINEAR,
                                borderMode=cv2.BORDER_REPLICATE)
-        image = total / np.float32(samples)
+        image = np.divide(total, np.float32(samples), out=total)
     sweep = abs(camera.fx * float(w) * exposure)  # px the turn moves the image
     if sweep > 0.5:
         length = 2 * math.ceil(sweep / 2) + 1
@@ -371,14 +378,26 @@ def motion_blur(image: np.ndarray, camera: PinholeCamera, depth: np.ndarray | No
     return image
 
 
+@functools.lru_cache(maxsize=4)
+def _pixel_grid(rows: int, cols: int, cx: float, cy: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(rows x cols float32, read-only) each pixel's column ``u`` and row ``v``, and
+    ``u - cx`` and ``v - cy``: the same for every frame of one camera."""
+    u, v = np.meshgrid(np.arange(cols, dtype=np.float32), np.arange(rows, dtype=np.float32))
+    grids = (u, v, u - np.float32(cx), v - np.float32(cy))
+    for grid in grids:
+        grid.flags.writeable = False
+    return grids
+
+
 def _imaging(image: np.ndarray, rng: np.random.Generator, imaging: Imaging) -> np.ndarray:
     """Lighting gain, blur and fresh noise (module notes)."""
     image = image * np.float32(rng.uniform(*imaging.gain))
     if imaging.blur_sigma > 0:
-        image = cv2.GaussianBlur(image, (0, 0), imaging.blur_sigma)
+        image = cv2.GaussianBlur(image, (0, 0), imaging.blur_sigma, dst=image)
     if imaging.noise_std > 0:
-        image += np.float32(imaging.noise_std) * rng.standard_normal(image.shape,
-                                                                     dtype=np.float32)
+        noise = rng.standard_normal(image.shape, dtype=np.float32)
+        image += np.multiply(np.float32(imaging.noise_std), noise, out=noise)
     return image
 
 

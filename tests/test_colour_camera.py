@@ -15,6 +15,7 @@ from abcwc.sim.colour_camera import (
     LUMINANCE,
     Imaging,
     PlanarTarget,
+    motion_blur,
     nearest_cover,
     render_colour,
     world_to_optical,
@@ -211,3 +212,38 @@ def test_driving_smears_each_pixel_along_its_path_from_the_principal_point():
     assert moving[int(CAMERA.cx)] == pytest.approx(still[int(CAMERA.cx)])
     with pytest.raises(ValueError, match="exposure"):
         Imaging(exposure=-0.01)
+
+
+def plain_driving_blur(image: np.ndarray, depth: np.ndarray, along: float,
+                       samples: int) -> np.ndarray:
+    """The driving blur written out plainly (module notes of abcwc.sim.colour_camera):
+    the mean of ``samples`` copies of ``image``, each pixel fetched from ``t`` of its
+    path ``(u - cx, v - cy) along / z`` px, ``t`` evenly from -1/2 to 1/2."""
+    rows, cols = image.shape
+    u, v = np.meshgrid(np.arange(cols, dtype=np.float32), np.arange(rows, dtype=np.float32))
+    grow = (along / depth).astype(np.float32)
+    du, dv = (u - np.float32(CAMERA.cx)) * grow, (v - np.float32(CAMERA.cy)) * grow
+    total = np.zeros_like(image)
+    for t in np.linspace(-0.5, 0.5, samples, dtype=np.float32):
+        total += cv2.remap(image, u + t * du, v + t * dv, cv2.INTER_LINEAR,
+                           borderMode=cv2.BORDER_REPLICATE)
+    return total / np.float32(samples)
+
+
+@pytest.mark.parametrize("speed", [0.3, 1.0, 3.0])
+def test_the_driving_blur_is_the_plain_mean_of_samples_along_each_path(speed):
+    """The blur as the simulator computes it (its pixel grids kept between frames, its
+    sample maps built in place, the longest path found from its square) is, bit for
+    bit, the plain mean of copies along each pixel's path, with one sample per pixel of
+    the longest path plus one (3 to 9)."""
+    rng = np.random.default_rng(7)
+    image = rng.uniform(0, 255, (CAMERA.height, CAMERA.width)).astype(np.float32)
+    depth = rng.uniform(2.0, 20.0, image.shape).astype(np.float32)  # 3, 7 and 9 samples
+    exposure = 0.03
+    along = speed * exposure
+    reach = (np.hypot(*np.meshgrid(np.arange(CAMERA.width) - CAMERA.cx,
+                                   np.arange(CAMERA.height) - CAMERA.cy)) * along / depth)
+    samples = int(np.clip(math.ceil(reach.max()) + 1, 3, 9))
+    blurred = motion_blur(image, CAMERA, depth, speed, 0.0, exposure)
+    assert np.array_equal(blurred, plain_driving_blur(image, depth, along, samples))
+    assert np.array_equal(motion_blur(image, CAMERA, depth, speed, 0.0, exposure), blurred)

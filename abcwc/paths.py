@@ -19,13 +19,17 @@ from importlib import resources
 from pathlib import Path
 from typing import TypeVar
 
-__all__ = ["DATA_ENV", "NotACheckoutError", "checkout_root", "data_dir", "read_document",
-           "require_checkout"]
+__all__ = ["CACHE_ENV", "DATA_ENV", "NotACheckoutError", "cache_folder", "checkout_root",
+           "data_dir", "read_document", "require_checkout"]
 
 _Parsed = TypeVar("_Parsed")
 
 DATA_ENV = "ABCWC_DATA"
 """Environment variable naming a data folder to use instead of the project's own."""
+
+CACHE_ENV = "ABCWC_CACHE_DIR"
+"""Environment variable naming the folder where slow, deterministic results are kept
+(:func:`cache_folder`)."""
 
 _PACKAGE_DIR = Path(__file__).resolve().parent
 
@@ -82,6 +86,17 @@ def data_dir() -> Path:
         f"abcwc data folder not found (looked in {', '.join(map(str, tried))}); reinstall "
         f"abcwc or set {DATA_ENV} to a copy of the repository's data/"
     )
+
+
+def cache_folder() -> Path:
+    """Where slow, deterministic results are kept between runs (seeded drives:
+    :mod:`abcwc.experiments.disk_cache`; synthesised speech:
+    :mod:`abcwc.perception.speech.synthesis`): ``$ABCWC_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/abcwc``, else ``~/.cache/abcwc``. Deleting it only costs time."""
+    if os.environ.get(CACHE_ENV):
+        return Path(os.environ[CACHE_ENV])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "abcwc"
 
 
 def read_document(path: Path, parse: Callable[[str], _Parsed], *,

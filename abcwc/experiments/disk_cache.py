@@ -40,19 +40,11 @@ from pathlib import Path
 from typing import TypeVar
 
 import abcwc
-from abcwc.paths import NotACheckoutError, data_dir
+from abcwc.paths import NotACheckoutError, cache_folder, data_dir
 
 Result = TypeVar("Result")
 
 _PLAIN = (bool, int, float, str, type(None))
-
-
-def cache_folder() -> Path:
-    """Where results are kept (module notes)."""
-    if os.environ.get("ABCWC_CACHE_DIR"):
-        return Path(os.environ["ABCWC_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "abcwc"
 
 
 @functools.lru_cache(maxsize=1)

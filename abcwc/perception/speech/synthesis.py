@@ -17,7 +17,13 @@ A ``Voice`` names its engine, the engine's voice and the *speaker* whose recordi
 was made from: kal and slt each speak through both flite and festival, so a split of
 voices into tuning and held-out sets is made by speaker (``TUNING_SPEAKERS``,
 ``HELD_OUT_SPEAKERS``), never by engine. Each engine's output is deterministic for a
-given version.
+given version, so each utterance is synthesised once: it is kept in memory, and the
+engine's WAV on disk under the cache folder (:func:`abcwc.paths.cache_folder`,
+``speech/``; chapter 04 and its tests keep 370 utterances, 22 MB), keyed by the engines' Debian
+package versions (:func:`engine_versions`), this module's code, the voice and the text;
+a notebook run again, its student copy and the tests read it there.
+Where the versions cannot be read, or the folder cannot be written, it is only kept in
+memory.
 
 Rate and pitch are asked of the engine itself: ``rate`` scales the speaking rate
 (1.2 is 20 % faster than the voice's own) and ``pitch`` moves the mean fundamental
@@ -37,16 +43,20 @@ frequency by semitones. How each engine takes them:
 
 from __future__ import annotations
 
+import hashlib
 import io
+import os
 import shutil
 import subprocess
 import tempfile
 import wave
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
+from abcwc.paths import cache_folder
 from abcwc.perception.speech.audio import SAMPLE_RATE, to_float_audio
 
 ENGINES = {"espeak-ng": "espeak-ng", "flite": "flite", "festival": "text2wave"}
@@ -160,7 +170,8 @@ def engine_versions() -> tuple[str, ...] | None:
 
 def speak(text: str, voice: Voice = Voice("en-us")) -> np.ndarray:
     """``text`` spoken in ``voice``: float audio in [-1, 1] at 16 kHz. Deterministic,
-    so the last 1024 are kept, as float32 (synthesis takes 10-600 ms each).
+    so the last 1024 are kept in memory (as float32), and every engine's WAV on disk
+    (module notes): synthesis takes 10-600 ms each.
 
     Raises ``RuntimeError`` when the voice's engine is not installed (the message
     names the Debian packages) and ``ValueError`` for an empty text."""
@@ -174,12 +185,63 @@ def speak(text: str, voice: Voice = Voice("en-us")) -> np.ndarray:
 
 @lru_cache(maxsize=1024)
 def _spoken(text: str, voice: Voice) -> np.ndarray:
-    wav = {"espeak-ng": _espeak, "flite": _flite, "festival": _festival}[voice.engine](
-        text, voice)
+    kept = _kept_at(text, voice)
+    wav = _read_kept(kept) if kept is not None else None
+    if wav is None:
+        wav = {"espeak-ng": _espeak, "flite": _flite, "festival": _festival}[voice.engine](
+            text, voice)
+        if kept is not None:
+            _keep(kept, wav)
     with wave.open(io.BytesIO(wav)) as w:
         rate = w.getframerate()
         samples = np.frombuffer(w.readframes(w.getnframes()), np.int16)
     return to_float_audio(samples, rate).astype(np.float32)
+
+
+@lru_cache(maxsize=1)
+def _what_the_audio_depends_on() -> str | None:
+    """A hash of the engines' package versions and of this module (how each engine is
+    asked); None where the versions cannot be read."""
+    versions = engine_versions()
+    if versions is None:
+        return None
+    digest = hashlib.sha256("\n".join(versions).encode())
+    digest.update(Path(__file__).read_bytes())
+    return digest.hexdigest()
+
+
+def _kept_at(text: str, voice: Voice) -> Path | None:
+    """Where the engine's WAV of ``text`` in ``voice`` is kept on disk (module notes);
+    None where the engines' versions cannot be read."""
+    depends_on = _what_the_audio_depends_on()
+    if depends_on is None:
+        return None
+    key = hashlib.sha256(f"{depends_on}\n{voice!r}\n{text}".encode()).hexdigest()
+    return cache_folder() / "speech" / f"{key}.wav"
+
+
+def _read_kept(path: Path) -> bytes | None:
+    """The WAV kept at ``path``; None if there is none, or it is not a whole WAV."""
+    try:
+        wav = path.read_bytes()
+        with wave.open(io.BytesIO(wav)) as w:
+            whole = len(w.readframes(w.getnframes())) == w.getnframes() * w.getsampwidth()
+    except (OSError, EOFError, wave.Error):
+        return None
+    return wav if whole else None
+
+
+def _keep(path: Path, wav: bytes) -> None:
+    """Write ``wav`` to ``path`` whole (a temporary file renamed: a reader never sees
+    half of it); where it cannot be written, nothing is kept."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".wav",
+                                         delete=False) as out:
+            out.write(wav)
+        os.replace(out.name, path)
+    except OSError:
+        pass
 
 
 def _espeak(text: str, voice: Voice) -> bytes:

@@ -14,13 +14,14 @@ installed copy.
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
 from typing import TypeVar
 
 __all__ = ["CACHE_ENV", "DATA_ENV", "NotACheckoutError", "cache_folder", "checkout_root",
-           "data_dir", "read_document", "require_checkout"]
+           "data_dir", "read_document", "require_checkout", "write_whole"]
 
 _Parsed = TypeVar("_Parsed")
 
@@ -97,6 +98,16 @@ def cache_folder() -> Path:
         return Path(os.environ[CACHE_ENV])
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(base) / "abcwc"
+
+
+def write_whole(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` by way of a temporary file beside it, renamed over it:
+    a reader in another process finds the old file or the new one, never half of one.
+    Raises ``OSError`` where it cannot be written."""
+    with tempfile.NamedTemporaryFile(dir=path.parent, suffix=path.suffix,
+                                     delete=False) as out:
+        out.write(data)
+    os.replace(out.name, path)
 
 
 def read_document(path: Path, parse: Callable[[str], _Parsed], *,

@@ -42,14 +42,13 @@ def engine(monkeypatch, tmp_path):
     monkeypatch.setattr(synthesis, "engine_available", lambda engine: True)
     monkeypatch.setattr(synthesis, "_espeak", fake_espeak)
     monkeypatch.setattr(synthesis, "engine_versions", lambda: VERSIONS)
-    synthesis._spoken.cache_clear()
-    synthesis._what_the_audio_depends_on.cache_clear()
+    _forget_in_memory()
     yield said
-    synthesis._spoken.cache_clear()
-    synthesis._what_the_audio_depends_on.cache_clear()
+    _forget_in_memory()
 
 
 def _forget_in_memory():
+    """Clear what the synthesis module keeps in memory, as a new process starts."""
     synthesis._spoken.cache_clear()
     synthesis._what_the_audio_depends_on.cache_clear()
 

@@ -34,13 +34,12 @@ import hashlib
 import inspect
 import os
 import pickle
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
 
 import abcwc
-from abcwc.paths import NotACheckoutError, cache_folder, data_dir
+from abcwc.paths import NotACheckoutError, cache_folder, data_dir, write_whole
 
 Result = TypeVar("Result")
 
@@ -103,9 +102,7 @@ def cached_on_disk(function: Callable[..., Result]) -> Callable[..., Result]:
                 with open(path, "rb") as kept:
                     return pickle.load(kept)
             result = function(*args, **kwargs)
-            with tempfile.NamedTemporaryFile(dir=folder, delete=False) as out:
-                pickle.dump(result, out)
-            os.replace(out.name, path)
+            write_whole(path, pickle.dumps(result))
             return result
 
     return cached

@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import hashlib
 import io
-import os
 import shutil
 import subprocess
 import tempfile
@@ -56,7 +55,7 @@ from pathlib import Path
 
 import numpy as np
 
-from abcwc.paths import cache_folder
+from abcwc.paths import cache_folder, write_whole
 from abcwc.perception.speech.audio import SAMPLE_RATE, to_float_audio
 
 ENGINES = {"espeak-ng": "espeak-ng", "flite": "flite", "festival": "text2wave"}
@@ -186,16 +185,21 @@ def speak(text: str, voice: Voice = Voice("en-us")) -> np.ndarray:
 @lru_cache(maxsize=1024)
 def _spoken(text: str, voice: Voice) -> np.ndarray:
     kept = _kept_at(text, voice)
-    wav = _read_kept(kept) if kept is not None else None
-    if wav is None:
+    heard = _read_kept(kept) if kept is not None else None
+    if heard is None:
         wav = {"espeak-ng": _espeak, "flite": _flite, "festival": _festival}[voice.engine](
             text, voice)
         if kept is not None:
             _keep(kept, wav)
-    with wave.open(io.BytesIO(wav)) as w:
-        rate = w.getframerate()
-        samples = np.frombuffer(w.readframes(w.getnframes()), np.int16)
+        heard = _samples_of(wav)
+    rate, samples = heard
     return to_float_audio(samples, rate).astype(np.float32)
+
+
+def _samples_of(wav: bytes) -> tuple[int, np.ndarray]:
+    """A WAV's sample rate (Hz) and its int16 samples, as many as it holds."""
+    with wave.open(io.BytesIO(wav)) as w:
+        return w.getframerate(), np.frombuffer(w.readframes(w.getnframes()), np.int16)
 
 
 @lru_cache(maxsize=1)
@@ -220,26 +224,25 @@ def _kept_at(text: str, voice: Voice) -> Path | None:
     return cache_folder() / "speech" / f"{key}.wav"
 
 
-def _read_kept(path: Path) -> bytes | None:
-    """The WAV kept at ``path``; None if there is none, or it is not a whole WAV."""
+def _read_kept(path: Path) -> tuple[int, np.ndarray] | None:
+    """The sample rate and samples of the WAV kept at ``path``; None if there is none,
+    or it holds fewer samples than its header says (not a whole WAV)."""
     try:
         wav = path.read_bytes()
         with wave.open(io.BytesIO(wav)) as w:
-            whole = len(w.readframes(w.getnframes())) == w.getnframes() * w.getsampwidth()
+            promised = w.getnframes() * w.getnchannels()
+        rate, samples = _samples_of(wav)
     except (OSError, EOFError, wave.Error):
         return None
-    return wav if whole else None
+    return (rate, samples) if len(samples) == promised else None
 
 
 def _keep(path: Path, wav: bytes) -> None:
-    """Write ``wav`` to ``path`` whole (a temporary file renamed: a reader never sees
-    half of it); where it cannot be written, nothing is kept."""
+    """Write ``wav`` to ``path`` whole (:func:`abcwc.paths.write_whole`); where it cannot
+    be written, nothing is kept."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".wav",
-                                         delete=False) as out:
-            out.write(wav)
-        os.replace(out.name, path)
+        write_whole(path, wav)
     except OSError:
         pass
 

@@ -396,5 +396,8 @@ def test_the_hand_over_refuses_goals_it_cannot_stand_on():
     assert not hand_over.active
     assert hand_over.start(0.0, chair.pose, np.array([[4.0, 2.0], [2.5, 3.0]])) is None
     assert hand_over.goal == (2.5, 3.0)
+    hand_over.end(4.0, "reached")  # taking over again notes how it ended
+    assert not hand_over.active and hand_over.goal is None
+    assert hand_over.outcomes == [(0.0, 4.0, "reached")]
     with pytest.raises(ValueError, match="reach"):
         HandOver(chair.params, reach=math.inf)

@@ -78,8 +78,8 @@ def hardware_chair(speed_cap: int = HARDWARE_CELL_CAP, port: str | None = None,
       speed cap set to ``speed_cap`` pot bytes from 128 (``sim_options`` ignored: a
       real room has no simulated world and no ground truth);
     * ``"simavr"`` -> our real firmware on a simulated Arduino driving the simulated
-      chair built from ``sim_options`` (the test suite runs every hardware cell this
-      way), with the same cap.
+      chair built from ``sim_options`` (the test suite runs every solution's hardware
+      cell this way), with the same cap.
 
     A device that is not there never crashes the cell: when the body cannot be opened
     for want of one (no such port, permission denied, not our firmware, no AVR

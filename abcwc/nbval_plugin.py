@@ -14,12 +14,15 @@ in a fresh kernel, one test per code cell:
 Kernels start with a fixed environment: this checkout of ``abcwc`` first on the path,
 matplotlib's inline backend (non-interactive; figures still become image/png outputs),
 ``PYTHONHASHSEED=0``, OpenBLAS's Haswell kernels on x86-64 (:data:`BLAS_KERNELS`),
-and ``ABCWC_PORT=simavr``: a test run never talks to a real chair,
-and every real-chair cell (:func:`abcwc.hardware_chair`) runs against our firmware on a
-simulated Arduino. Where the AVR toolchain and simavr are missing (outside CI),
-``ABCWC_PORT`` is removed instead and those cells say they are skipped; under CI
+and, for ``solutions/``, ``ABCWC_PORT=simavr``: a test run never talks to a real chair,
+and every real-chair cell (:func:`abcwc.hardware_chair`) of a solution runs against our
+firmware on a simulated Arduino. Where the AVR toolchain and simavr are missing (outside
+CI), ``ABCWC_PORT`` is removed instead and those cells say they are skipped; under CI
 (``CI=true``) it stays set, those cells print which tools are missing (a missing device
-never crashes a cell), and the firmware's own tests fail.
+never crashes a cell), and the firmware's own tests fail. The student copies run as on a
+student's laptop with no chair attached (:data:`STUDENT_KERNEL_ENV`): their real-chair
+cells, the solutions' own code, say they are skipped, and the firmware is driven once
+per chapter, not twice.
 
 Under pytest-xdist's ``--dist loadscope`` (pyproject's addopts), a chapter's two
 notebooks, its checks' tests and the tests that compute what it keeps on disk
@@ -77,6 +80,8 @@ KERNEL_ENV = {
     "ABCWC_PORT": SIMAVR_PORT if firmware_in_loop_available() else None,
     **BLAS_KERNELS,
 }
+STUDENT_KERNEL_ENV = {**KERNEL_ENV, "ABCWC_PORT": None}
+"""The kernels of ``course/``'s student copies: as :data:`KERNEL_ENV`, with no chair."""
 
 try:
     from nbval.plugin import IPyNbFile, get_sanitize_patterns
@@ -90,11 +95,12 @@ SOLUTIONS_DIR = "solutions"  # under the pytest rootdir
 
 
 @contextlib.contextmanager
-def kernel_environment() -> Iterator[None]:
-    """Set :data:`KERNEL_ENV` in ``os.environ`` while a kernel starts, then restore it."""
-    saved = {key: os.environ.get(key) for key in KERNEL_ENV}
+def kernel_environment(environment: dict[str, str | None] = KERNEL_ENV) -> Iterator[None]:
+    """Set ``environment`` (default :data:`KERNEL_ENV`) in ``os.environ`` while a kernel
+    starts, then restore it."""
+    saved = {key: os.environ.get(key) for key in environment}
     try:
-        _set_environ(KERNEL_ENV)
+        _set_environ(environment)
         yield
     finally:
         _set_environ(saved)
@@ -112,18 +118,19 @@ def _set_environ(values: dict[str, str | None]) -> None:
 if IPyNbFile is not None:
 
     class CourseNotebook(IPyNbFile):
-        """nbval's notebook collector, lax under ``course/``, with our kernel env and
-        sanitizers (a ``--nbval-sanitize-with`` file given on the command line adds to
-        them)."""
+        """nbval's notebook collector, lax and with no chair under ``course/``, with our
+        kernel env and sanitizers (a ``--nbval-sanitize-with`` file given on the command
+        line adds to them)."""
 
         def __init__(self, *args, **kwargs) -> None:
             super().__init__(*args, **kwargs)
             lax_dir = (self.config.rootpath / LAX_DIR).resolve()
-            if self.path.resolve().is_relative_to(lax_dir):
+            self.student_copy = self.path.resolve().is_relative_to(lax_dir)
+            if self.student_copy:
                 self.compare_outputs = False
 
         def setup(self) -> None:
-            with kernel_environment():
+            with kernel_environment(STUDENT_KERNEL_ENV if self.student_copy else KERNEL_ENV):
                 super().setup()
 
         def setup_sanitize_files(self) -> None:
@@ -156,11 +163,14 @@ def chapter_scope(scope: str) -> str:
     return f"chapter {chapter['notebook'] or chapter['checks']}"
 
 
-READ_WITH_CHAPTER = {"tests/test_follow.py": "17", "tests/test_slam_sim.py": "14"}
+READ_WITH_CHAPTER = {"tests/test_follow.py": "17", "tests/test_slam_sim.py": "14",
+                     "tests/test_marker_fixes.py": "10"}
 """Test files that compute what a chapter keeps on disk, so they share its scope: the
 follower's tests drive chapter 17's lab trials
-(:func:`abcwc.experiments.follow_trial.run_trial_in`), and the simulated SLAM tests
-replay chapter 14's floor survey (:func:`abcwc.checks.ch14.floor_survey`)."""
+(:func:`abcwc.experiments.follow_trial.run_trial_in`), the simulated SLAM tests
+replay chapter 14's floor survey (:func:`abcwc.checks.ch14.floor_survey`), and the
+marker fixes' tests filter four of chapter 10's camera drives
+(:func:`abcwc.experiments.nees.record_marker_drive`)."""
 
 
 _CHAPTER_FILE = re.compile(rf"(?:{SOLUTIONS_DIR}|{LAX_DIR})/(?P<notebook>\d\d)_[^/]*\.ipynb"

@@ -432,11 +432,17 @@ def test_nbval_compares_solutions_and_runs_course_lax(nbval_workspace):
     edit_cell(
         nbval_workspace / "course" / "00_example.ipynb", "check", execution_count=4, outputs=[stale]
     )
+    # The student copy runs as on a laptop with no chair, whatever the caller's ABCWC_PORT
+    student = nbval_workspace / "course" / "00_example.ipynb"
+    nb = nbformat.read(student, as_version=4)
+    nb.cells.append(nbformat.v4.new_code_cell(
+        "import os\nassert 'ABCWC_PORT' not in os.environ, os.environ['ABCWC_PORT']"))
+    nbformat.write(nb, student)
     # The kernels get the inline backend (so figures are still shown) whatever the caller's
     # MPLBACKEND says; the stored solution prints the backend and a figure's text/plain.
-    result = run_nbval(nbval_workspace, MPLBACKEND="Agg")
+    result = run_nbval(nbval_workspace, MPLBACKEND="Agg", ABCWC_PORT="simavr")
     assert result.returncode == 0, result.stdout + result.stderr
-    assert "12 passed" in result.stdout  # 7 solution cells + 5 course cells
+    assert "13 passed" in result.stdout  # 7 solution cells + 6 course cells
 
 
 def test_nbval_fails_on_changed_solution_output_and_on_course_errors(nbval_workspace):
@@ -495,6 +501,7 @@ def test_a_chapters_notebooks_and_checks_are_scheduled_together():
                   "tests/test_checks_ch10.py"):
         assert chapter_scope(scope) == "chapter 10"
     assert chapter_scope("tests/test_follow.py") == "chapter 17"  # the same lab trials
+    assert chapter_scope("tests/test_marker_fixes.py") == "chapter 10"  # its camera drives
     for scope in ("tests/test_slam.py", "tests/test_dwa.py::TestWindow",
                   "tests/test_checks_ch00_ch01.py", "course/nbgrader/source/10/10.ipynb",
                   "course/README.md", "solutions/10_the_ekf.py"):

@@ -8,6 +8,7 @@ import sys
 import textwrap
 
 import numpy as np
+import pytest
 
 from abcwc.experiments import disk_cache
 from abcwc.experiments.disk_cache import cached_on_disk, call_key
@@ -45,6 +46,35 @@ def test_the_key_follows_the_arguments_the_code_and_the_constants(monkeypatch):
         return np.random.default_rng(seed).normal(size=3) * SCALE
 
     assert call_key(other, (4,), {}) != key
+
+
+def _drive_for(seed: int, seconds: float = 60.0) -> float:
+    return seed * seconds
+
+
+def test_a_call_is_keyed_by_its_bound_arguments():
+    """Positional or by name, the default given or not: one call, one key."""
+    key = call_key(_drive_for, (1, 60.0), {})
+    assert call_key(_drive_for, (), {"seed": 1, "seconds": 60.0}) == key
+    assert call_key(_drive_for, (1,), {"seconds": 60.0}) == key
+    assert call_key(_drive_for, (1,), {}) == key
+    assert call_key(_drive_for, (1, 30.0), {}) != key
+    with pytest.raises(TypeError, match="_drive_for"):
+        call_key(_drive_for, (1,), {"minutes": 1.0})
+
+
+def test_a_call_with_an_object_of_no_repr_is_run_not_kept(tmp_path, monkeypatch):
+    """An argument shown as ``<... object at 0x...>`` would make a new key every call:
+    such a call runs and leaves nothing behind."""
+    monkeypatch.setenv("ABCWC_CACHE_DIR", str(tmp_path))
+    calls.clear()
+    cached = cached_on_disk(_drive_for)
+    assert call_key(_drive_for, (object(),), {}) is None
+    assert cached(1, 2.0) == 2.0 and cached(1, 2.0) == 2.0
+    assert len(list(tmp_path.glob("_drive_for-*.pickle"))) == 1
+    with pytest.raises(TypeError):  # run, as without the cache: object() * 2.0
+        cached(object(), 2.0)
+    assert len(list(tmp_path.glob("_drive_for-*.pickle"))) == 1
 
 
 def test_processes_take_turns_and_the_second_reads_the_first(tmp_path):

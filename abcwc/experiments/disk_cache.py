@@ -7,7 +7,8 @@ file named by a hash of
 
 * the function's own source and the values of the plain constants it reads from its
   module (numbers, strings, booleans and tuples of them: a notebook's ``STILL = 2.0``);
-* the call's arguments (their ``repr``);
+* the call's arguments (their ``repr``), each bound to its parameter's name with the
+  defaults filled in, so ``f(0, 60.0)`` and ``f(seed=0, seconds=60.0)`` share a result;
 * every ``.py`` file of the ``abcwc`` package and every file of its ``data`` folder
   (a change anywhere below makes new keys);
 * the BLAS kernels OpenBLAS is told to use (``OPENBLAS_CORETYPE``, which the test
@@ -20,7 +21,9 @@ and returns what the file holds, or calls the function and writes its result the
 Two processes asking for the same key at once take turns on a lock file (one beside
 each result): the second reads what the first wrote. The folder is
 ``$ABCWC_CACHE_DIR``, else ``$XDG_CACHE_HOME/abcwc``, else ``~/.cache/abcwc``; where it
-cannot be written, the function simply runs; delete the folder to free its space
+cannot be written, or where an argument has no ``repr`` of its own (``<... object at
+0x...>``, a detector handed in, say: no later call could name it), the function simply
+runs; delete the folder to free its space
 (chapter 10's drives take about 11 MB and chapter 14's survey 17 MB for each version of
 the code). Only deterministic functions belong here: every random source seeded by the
 arguments or the constants.
@@ -34,6 +37,7 @@ import hashlib
 import inspect
 import os
 import pickle
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
@@ -44,6 +48,8 @@ from abcwc.paths import NotACheckoutError, cache_folder, data_dir, write_whole
 Result = TypeVar("Result")
 
 _PLAIN = (bool, int, float, str, type(None))
+_AT_AN_ADDRESS = re.compile(r" at 0x[0-9a-fA-F]+>")
+"""Python's default ``repr`` of an object, ``<module.Class object at 0x7f...>``."""
 
 
 @functools.lru_cache(maxsize=1)
@@ -69,8 +75,10 @@ def _plain(value: object) -> bool:
     return isinstance(value, _PLAIN)
 
 
-def call_key(function: Callable, args: tuple, kwargs: dict) -> str:
-    """The hash a call of ``function`` is kept under (module notes)."""
+def call_key(function: Callable, args: tuple, kwargs: dict) -> str | None:
+    """The hash a call of ``function`` is kept under (module notes); None where an
+    argument's ``repr`` names a memory address (an object with no repr of its own, such
+    as a detector handed in): such a call would never be met again, so it is not kept."""
     code = function.__code__
     constants = {name: function.__globals__[name] for name in sorted(code.co_names)
                  if name in function.__globals__ and _plain(function.__globals__[name])}
@@ -78,8 +86,16 @@ def call_key(function: Callable, args: tuple, kwargs: dict) -> str:
         source = inspect.getsource(function)
     except (OSError, TypeError):  # no source file to read: the compiled code instead
         source = repr((code.co_code, code.co_consts))
+    try:
+        bound = inspect.signature(function).bind(*args, **kwargs)
+    except TypeError as wrong:  # the call itself is wrong: say so, as the function would
+        raise TypeError(f"{function.__qualname__}(): {wrong}") from None
+    bound.apply_defaults()
+    arguments = repr(list(bound.arguments.items()))
+    if _AT_AN_ADDRESS.search(arguments):
+        return None
     parts = [function.__qualname__, source, repr(constants),
-             repr(args), repr(sorted(kwargs.items())), package_fingerprint(),
+             arguments, package_fingerprint(),
              f"OPENBLAS_CORETYPE={os.environ.get('OPENBLAS_CORETYPE')}"]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:32]
 
@@ -89,8 +105,11 @@ def cached_on_disk(function: Callable[..., Result]) -> Callable[..., Result]:
 
     @functools.wraps(function)
     def cached(*args: object, **kwargs: object) -> Result:
+        key = call_key(function, args, kwargs)
+        if key is None:  # an argument with no repr of its own: nothing to key it by
+            return function(*args, **kwargs)
         folder = cache_folder()
-        path = folder / f"{function.__name__}-{call_key(function, args, kwargs)}.pickle"
+        path = folder / f"{function.__name__}-{key}.pickle"
         try:
             folder.mkdir(parents=True, exist_ok=True)
             lock = open(path.with_suffix(".lock"), "a")  # noqa: SIM115

@@ -18,8 +18,9 @@ The experiment behind issue-level figures and tests (Bar-Shalom, Li and Kirubara
 
 The fixes of step 2 come either from the simulator's truth with noise of
 :data:`FIX_STD` (``fixes="truth"``), or from the chair's camera reading the floor's
-fixed ArUco markers (``fixes="markers"``: :func:`record_with_sightings`; each reading's
-range and bearing is an update, :meth:`~abcwc.estimation.ekf.ChairEkf.update_landmark`).
+fixed ArUco markers (``fixes="markers"``: :func:`record_marker_drive`, the drive and its
+sightings kept on disk, the same drives chapter 10 records; each reading's range and
+bearing is an update, :meth:`~abcwc.estimation.ekf.ChairEkf.update_landmark`).
 """
 
 from __future__ import annotations
@@ -42,12 +43,14 @@ from abcwc.estimation.ekf import (
 )
 from abcwc.estimation.odometry import odometry_from_log
 from abcwc.estimation.umbmark import THESIS_SIDE, e_max_syst, umbmark_corrections
+from abcwc.experiments.disk_cache import cached_on_disk
 from abcwc.experiments.truth_fixes import absolute_fixes
 from abcwc.experiments.umbmark_trials import calibrate_distance_scale, run_umbmark
 from abcwc.log import RunLog
+from abcwc.params import default_params
 from abcwc.perception.markers import MarkerSighting, sight_markers
 from abcwc.sim.base import SimBase
-from abcwc.sim.world import box_world
+from abcwc.sim.world import box_world, load_world
 from abcwc.types import CAMERA_FRAME, CameraImage, Pose2D, Twist
 
 FIX_STD = (0.05, 0.05, 0.02)
@@ -173,28 +176,61 @@ def record_with_sightings(chair: SimBase, controller: Callable, seconds: float
     return log, {rows[t]: found for t, found in seen.items() if t in rows}
 
 
+@cached_on_disk  # a seeded drive with the camera on: minutes, kept on disk
+def record_marker_drive(seed: int, seconds: float
+                        ) -> tuple[RunLog, np.ndarray, dict[int, list[MarkerSighting]]]:
+    """The worn chair on the floor world (seed ``seed``, no people, the camera on) stands
+    still :data:`STILL_SECONDS` s, then drives the mixed route for ``seconds`` s, steered
+    by the simulator's ground truth through its safety filter (the estimators only
+    listen). Returns the :class:`~abcwc.log.RunLog` of it all, the simulator's true gyro
+    bias (rad/s) inside each row's gyro sample, and what the camera read of the floor's
+    fixed markers, ``{row: [MarkerSighting, ...]}`` (:func:`record_with_sightings`)."""
+    chair = SimBase("floor", seed=seed, errors="worn", people=False, camera="gray")
+    route = FollowWaypoints(floor_mixed_drive(), GroundTruth())
+    biases = []
+
+    def controller(frame):
+        biases.append(chair.gyro.bias)  # the bias inside this frame's gyro sample
+        return Twist(0.0, 0.0) if frame.t < STILL_SECONDS else route(frame)
+
+    log, sightings = record_with_sightings(chair, controller, STILL_SECONDS + seconds)
+    biases.append(chair.gyro.bias)
+    return log, np.array(biases[1:]), sightings  # the first call saw the frame before row 0
+
+
+def split_still(log: RunLog, sightings: dict[int, list[MarkerSighting]]
+                ) -> tuple[np.ndarray, RunLog, dict[int, list[MarkerSighting]]]:
+    """A :func:`record_marker_drive` recording's gyro samples taken standing still (rad/s),
+    its drive from ``t = STILL_SECONDS`` on, and the drive's sightings numbered by the
+    drive's rows."""
+    moving = log.t >= STILL_SECONDS - 1e-9
+    first = int(np.argmax(moving))
+    return (log.gyro_z[~moving], log.select(moving),
+            {row - first: seen for row, seen in sightings.items() if row >= first})
+
+
 def ekf_run(seed: int, seconds: float, calibration: OdometryCalibration,
             fix_every: float = 10.0, fixes: str = "truth") -> EkfRun:
     """One seeded drive on the floor world, filtered; see the module docstring."""
     if fixes not in ("truth", "markers"):
         raise ValueError(f"fixes must be 'truth' or 'markers', got {fixes!r}")
-    sim = SimBase("floor", seed=seed, errors="worn", people=False,
-                  camera="gray" if fixes == "markers" else None)
-    bias, bias_std = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), STILL_SECONDS).gyro_z)
-    route = FollowWaypoints(floor_mixed_drive(), GroundTruth())
     if fixes == "markers":
-        log, sightings = record_with_sightings(sim, route, seconds)
+        recording, _, seen = record_marker_drive(seed, seconds)
+        still, log, sightings = split_still(recording, seen)
+        bias_prior = gyro_bias_prior(still)
     else:
-        log = sim.run(route, seconds)
+        sim = SimBase("floor", seed=seed, errors="worn", people=False)
+        bias_prior = gyro_bias_prior(sim.drive(Twist(0.0, 0.0), STILL_SECONDS).gyro_z)
+        log = sim.run(FollowWaypoints(floor_mixed_drive(), GroundTruth()), seconds)
     if log.collisions[-1]:
         raise RuntimeError(f"seed {seed}: the route touched something; the drive is void")
     if fixes == "markers":
-        ekf = calibrated_filter(Pose2D(*log.pose[0]), (bias, bias_std), calibration, fix_every)
-        landmarks = {m.marker_id: m.centre[:2] for m in sim.world.markers}
+        ekf = calibrated_filter(Pose2D(*log.pose[0]), bias_prior, calibration, fix_every)
+        landmarks = {m.marker_id: m.centre[:2] for m in load_world("floor").markers}
         states, covs = run_ekf(log, ekf, sightings=sightings, landmarks=landmarks,
-                               mount=sim.params.depth_scan.mount)
+                               mount=default_params().depth_scan.mount)
     else:
-        states, covs = filter_drive(log, (bias, bias_std), calibration, seed, fix_every)
+        states, covs = filter_drive(log, bias_prior, calibration, seed, fix_every)
     raw = odometry_from_log(log)
     return EkfRun(nees(log.pose, states, covs),
                   math.hypot(*(states[-1, :2] - log.pose[-1, :2])),

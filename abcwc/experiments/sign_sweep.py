@@ -43,6 +43,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from abcwc.experiments.disk_cache import cached_on_disk
 from abcwc.experiments.views import random_views
 from abcwc.geometry import wrap_angle
 from abcwc.params import ChairParams
@@ -59,7 +60,8 @@ class SignSweep:
     corners projected), then for the detector: whether steps 1-4 reported the sought
     sign (``matched``), its ``correlation`` (nan where not matched), whether it was
     ``verified``, its ``bearing_error`` (rad, nan where not matched) and the
-    detector's time (``ms``)."""
+    detector's time (``ms``: as measured when the sweep was made, also where a later
+    call reads it back from disk)."""
 
     features: str
     shown: str
@@ -87,6 +89,7 @@ class SignSweep:
         return float(found[band].mean()) if band.any() else math.nan
 
 
+@cached_on_disk  # seeded: a notebook, its student copy and its check render the views once
 def sweep_sign_views(features: str = "sift", shown: str = "EXIT", sought: str = "EXIT",
                      count: int = 60, seed: int = 0, distances: tuple[float, float] = (1.5, 9.0),
                      max_bearing: float = 0.4, max_turn: float = 1.0,

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from abcwc.experiments.disk_cache import cached_on_disk
 from abcwc.experiments.views import random_views
 from abcwc.geometry import wrap_angle
 from abcwc.params import ChairParams
@@ -47,6 +48,7 @@ class TagSweep:
         return float(self.distance[read].max()) if read.any() else 0.0
 
 
+@cached_on_disk  # seeded: a notebook and its student copy render the views once
 def sweep_tag_views(count: int = 120, seed: int = 0, card: FollowCard | None = None,
                     distances: tuple[float, float] = (0.6, 9.0), max_bearing: float = 0.45,
                     max_turn: float = 0.9, params: ChairParams | None = None) -> TagSweep:

@@ -95,9 +95,9 @@ SOLUTIONS_DIR = "solutions"  # under the pytest rootdir
 
 
 @contextlib.contextmanager
-def kernel_environment(environment: dict[str, str | None] = KERNEL_ENV) -> Iterator[None]:
-    """Set ``environment`` (default :data:`KERNEL_ENV`) in ``os.environ`` while a kernel
-    starts, then restore it."""
+def kernel_environment(environment: dict[str, str | None]) -> Iterator[None]:
+    """Set ``environment`` (:data:`KERNEL_ENV` or :data:`STUDENT_KERNEL_ENV`) in
+    ``os.environ`` while a kernel starts, then restore it."""
     saved = {key: os.environ.get(key) for key in environment}
     try:
         _set_environ(environment)

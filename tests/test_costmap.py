@@ -137,6 +137,28 @@ def test_the_rolling_window_follows_the_chair_on_the_map_grid():
         Costmap.rolling_window((math.nan, 0.0, 0.0), 5.0, 0.05)
 
 
+def test_a_rolling_window_on_a_maps_lattice_shares_its_cells():
+    """A map whose origin is off the multiples of the resolution (-0.475 m): windows
+    on its lattice have every cell centre at a map cell's centre, so a cell is read
+    from one map cell, not from whichever of two a boundary falls to."""
+    grid = Costmap(0.05, 200, 200, (-0.475, -0.475, 0.0))
+    for centre in [(3.01, 2.49, 0.3), (7.777, 1.234, -2.0)]:
+        window = Costmap.rolling_window(centre, 5.0, 0.05, lattice=grid)
+        rows, cols = np.indices(window.shape)
+        in_cells = grid.to_cell_units(window.cell_to_world(rows.ravel(), cols.ravel()))
+        assert np.allclose(in_cells % 1.0, 0.5)
+        # on multiples of 0.05 m instead, every cell centre lies on a map cell boundary
+        plain = Costmap.rolling_window(centre, 5.0, 0.05)
+        fraction = grid.to_cell_units(plain.cell_to_world(rows.ravel(), cols.ravel())) % 1.0
+        assert np.all(np.minimum(fraction, 1.0 - fraction) < 1e-6)
+    on_lattice = Costmap(0.05, 200, 200, (-0.5, -0.5, 0.0))
+    a = Costmap.rolling_window((10.03, -4.51, 1.0), 5.0, 0.05, lattice=on_lattice)
+    assert a.origin == Costmap.rolling_window((10.03, -4.51, 1.0), 5.0, 0.05).origin
+    with pytest.raises(ValueError, match="lattice must be axis-aligned"):
+        Costmap.rolling_window((0.0, 0.0, 0.0), 5.0, 0.05,
+                               lattice=Costmap(0.1, 10, 10, (0.0, 0.0, 0.0)))
+
+
 def test_the_footprint_over_an_obstacle_is_lethal():
     footprint = Footprint(np.array([[0.3, 0.2], [-0.1, 0.2], [-0.1, -0.2], [0.3, -0.2]]))
     costmap = Costmap(0.05, 60, 60, origin=(-1.5, -1.5, 0.0), default=FREE_SPACE)

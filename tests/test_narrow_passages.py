@@ -32,9 +32,12 @@ DOOR = (6.0, 2.5)  # the door's middle (m)
 
 def _door_world(tmp_path: Path, width: float, way_round: bool = True,
                 start: tuple[float, float, float] = (3.0, 2.5, 0.0),
-                goal: tuple[float, float, float] = (9.0, 2.5, 0.0)) -> object:
+                goal: tuple[float, float, float] = (9.0, 2.5, 0.0),
+                shift: float = 0.0) -> object:
     """Two 6 x 5 m rooms, a ``width`` m door between them, and (``way_round``) a 2 m
-    corridor along their north side that both open on through 1.2 m gaps."""
+    corridor along their north side that both open on through 1.2 m gaps; everything
+    moved ``shift`` m east and north (a building's walls need not lie on the map's
+    5 cm cells)."""
     low, high = DOOR[1] - width / 2, DOOR[1] + width / 2
     walls = [[[0, 0], [12, 0], [12, 7], [0, 7], [0, 0]],
              [[6, 0], [6, low]], [[6, high], [6, 7 if not way_round else 5]]]
@@ -42,9 +45,11 @@ def _door_world(tmp_path: Path, width: float, way_round: bool = True,
         walls += [[[0, 5], [1.0, 5]], [[2.2, 5], [9.6, 5]], [[10.8, 5], [12, 5]]]
     else:
         walls.append([[0, 5], [12, 5]])
+    walls = [[[x + shift, y + shift] for x, y in line] for line in walls]
+    places = {"start": [start[0] + shift, start[1] + shift, start[2]],
+              "office": [goal[0] + shift, goal[1] + shift, goal[2]]}
     path = tmp_path / f"door_{width:.2f}.json"
-    path.write_text(json.dumps({"name": "two rooms", "walls": walls,
-                                "places": {"start": list(start), "office": list(goal)}}))
+    path.write_text(json.dumps({"name": "two rooms", "walls": walls, "places": places}))
     return load_world(path)
 
 
@@ -98,6 +103,31 @@ def test_through_every_door_the_chair_fits_and_round_the_others(tmp_path, width,
     if fits:
         assert len(doors) == 1 and abs(doors[0].width - width) <= 0.05 + 1e-9  # a cell
         assert math.hypot(doors[0].x - DOOR[0], doors[0].y - DOOR[1]) < 0.05
+
+
+@pytest.mark.parametrize(("start", "goal"), [((3.0, 2.5, 0.0), (9.0, 2.5, 0.0)),
+                                             ((2.0, 1.0, 0.5), (10.0, 4.0, 0.0))],
+                         ids=["head-on", "at an angle"])
+def test_a_door_off_the_maps_cells_is_driven_through_as_one_on_them(tmp_path, start, goal):
+    """The 0.80 m door with the whole building moved half a cell (2.5 cm) off the 5 cm
+    lattice: the map's cells start at -0.475 m, and the local windows must lie on those
+    cells, not on multiples of 0.05 m, or every window cell straddles two map cells and
+    the door's jambs grow a cell to the local planner (it backed off, cleared and went
+    round in 79 s, or was still trying at 90 s, where the door on the lattice takes
+    14-23 s)."""
+    shift = 0.025
+    chair = SimBase(_door_world(tmp_path, 0.80, start=start, goal=goal, shift=shift),
+                    seed=2, lidar=True, people=False)
+    navigator = Navigator.for_world(chair.world)
+    assert navigator.static_map.origin.x == pytest.approx(-0.5 + shift)
+    navigator.go_to("office")
+    track = _drive(chair, navigator, 45)
+    assert navigator.status is Status.SUCCEEDED, navigator.failure
+    assert chair.collisions == 0
+    track[:, 1:] -= shift
+    assert _through_the_door(track)
+    assert track[-1, 0] < 35.0
+    assert "closing the gap ahead" not in navigator.recoveries_used
 
 
 def test_the_chair_needs_more_than_its_inscribed_circle_at_a_door():

@@ -298,6 +298,10 @@ class Navigator(BehaviourBase):
     def _use_map(self, static_map: Costmap) -> None:
         """Everything the navigator derives from its static map."""
         self.static_map = static_map
+        # the local windows on the map's own cells where they can be (same resolution,
+        # axis-aligned): else each window cell straddles map cells (Costmap.rolling_window)
+        self._lattice = static_map if (static_map.origin.theta == 0.0 and math.isclose(
+            static_map.resolution, self.settings.resolution)) else None
         self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
         self._map_costmap = self.global_costmap  # without what avoid() added for a goal
         self.avoided = np.zeros(static_map.shape, dtype=bool)  # cells avoid() made walls
@@ -490,7 +494,8 @@ class Navigator(BehaviourBase):
         scan = frame.readings.get(LIDAR_FRAME)
         if not isinstance(scan, LaserScan):
             return False
-        around = Costmap.rolling_window(pose, s.local_size, s.resolution, default=FREE_SPACE)
+        around = Costmap.rolling_window(pose, s.local_size, s.resolution, default=FREE_SPACE,
+                                        lattice=self._lattice)
         around.add_scan(scan, compose(pose, self.params.lidar.mount), s.obstacle_range,
                         s.raytrace_range)
         return all(footprint_cost(around, self.footprint,
@@ -613,7 +618,7 @@ class Navigator(BehaviourBase):
         is free where the scan's beams now cross it, instead of a wall no plan knows of."""
         s = self.settings
         local = Costmap.rolling_window(pose, s.local_size, s.resolution,
-                                       default=NO_INFORMATION)
+                                       default=NO_INFORMATION, lattice=self._lattice)
         rows, cols = np.indices(local.shape)
         centres = local.cell_to_world(rows.ravel(), cols.ravel())
         g_rows, g_cols = self.static_map.world_to_cell(centres)

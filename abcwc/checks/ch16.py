@@ -253,7 +253,8 @@ def door_decision(planner: DwaPlanner, static: Costmap, path: np.ndarray, pose: 
                   velocity: tuple[float, float]) -> tuple[DwaResult, Costmap]:
     """One DWA cycle at ``pose``: the 5 x 5 m local costmap cut from ``static`` (cells off
     it lethal) and the next 2 m of ``path`` from its point nearest the chair."""
-    local = Costmap.rolling_window(pose, 5.0, static.resolution, default=FREE_SPACE)
+    local = Costmap.rolling_window(pose, 5.0, static.resolution, default=FREE_SPACE,
+                                   lattice=static if static.origin.theta == 0.0 else None)
     rows, cols = np.indices(local.shape)
     g_rows, g_cols = static.world_to_cell(local.cell_to_world(rows.ravel(), cols.ravel()))
     on_map = static.contains(g_rows, g_cols)

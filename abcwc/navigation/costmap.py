@@ -142,16 +142,33 @@ class Costmap(GridGeometry):
 
     @classmethod
     def rolling_window(cls, centre: PoseLike, size: float, resolution: float,
-                       default: int = NO_INFORMATION) -> Costmap:
+                       default: int = NO_INFORMATION, lattice: GridGeometry | None = None
+                       ) -> Costmap:
         """A ``size`` x ``size`` m local costmap (axis-aligned) centred on ``centre``'s
-        position, its origin snapped down to a multiple of the resolution (costmap_2d's
-        rolling window: cells keep their place in the map as the window moves)."""
+        position, its origin snapped down onto a lattice of cells (costmap_2d's rolling
+        window: cells keep their place in the map as the window moves): multiples of the
+        resolution, or, given a map's ``lattice`` (axis-aligned, the same resolution),
+        that map's own cells. A window whose cells straddle the map's would take each
+        of its cells from one of two map cells, and a wall drawn from the map would lie
+        half a cell from the same wall drawn from a scan: door jambs a cell thicker, a
+        door a cell narrower to the local planner than to the global one."""
         x, y = position_of(centre, "centre")
         if not (math.isfinite(size) and size > 0):
             raise ValueError(f"size must be a finite number > 0 m, got {size!r}")
+        x_anchor = y_anchor = 0.0
+        if lattice is not None:
+            if lattice.origin.theta != 0.0 or not math.isclose(lattice.resolution, resolution):
+                raise ValueError(f"the lattice must be axis-aligned with the window's "
+                                 f"resolution {resolution:g} m, got yaw "
+                                 f"{lattice.origin.theta:g} rad and {lattice.resolution:g} m")
+            # the map's offset from the multiples of the resolution (none: as without it)
+            x_anchor, y_anchor = (
+                0.0 if abs(offset) < 1e-9 else offset
+                for offset in (value - round(value / resolution) * resolution
+                               for value in (lattice.origin.x, lattice.origin.y)))
         cells = max(1, round(size / resolution))
-        x0 = math.floor((x - size / 2) / resolution) * resolution
-        y0 = math.floor((y - size / 2) / resolution) * resolution
+        x0 = x_anchor + math.floor((x - size / 2 - x_anchor) / resolution) * resolution
+        y0 = y_anchor + math.floor((y - size / 2 - y_anchor) / resolution) * resolution
         return cls(resolution, cells, cells, (x0, y0, 0.0), default)
 
     # ------------------------------------------------------------ layers

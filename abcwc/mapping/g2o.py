@@ -13,6 +13,15 @@ seen from pose ``i`` (``relative(x_i, x_j)``, :func:`abcwc.geometry.relative`) w
 3x3 information matrix (the inverse covariance, in units of 1/m^2, 1/(m rad), 1/rad^2),
 given by its upper triangle row by row. ``FIX`` holds the named vertices in place.
 
+TORO's older format (Grisetti et al., "A tree parameterization for efficiently computing
+maximum likelihood maps using gradient descent", RSS 2007), in which several benchmark
+graphs are still published (the noisy M3500 variants, Intel), reads too::
+
+    VERTEX2 id x y theta
+    EDGE2 i j dx dy dtheta Ixx Ixy Iyy Itt Ixt Iyt
+
+the same records with the information matrix's six entries in another order.
+
 Choices made here:
 
 * Files may be gzipped; they are recognised by their first two bytes (1f 8b), so a
@@ -45,8 +54,10 @@ from abcwc.geometry import chain_poses, wrap_angle
 GZIP_MAGIC = b"\x1f\x8b"
 UPPER_TRIANGLE = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 """Row and column of I11 I12 I13 I22 I23 I33, the order the file gives them in."""
-FIELD_COUNTS = {"VERTEX_SE2": 5, "EDGE_SE2": 12}
-"""Fields on a line of each record, its tag included."""
+FIELD_COUNTS = {"VERTEX_SE2": 5, "EDGE_SE2": 12, "VERTEX2": 5, "EDGE2": 12}
+"""Fields on a line of each record, its tag included (TORO's VERTEX2 and EDGE2 too)."""
+TORO_TO_G2O_INFORMATION = (0, 1, 4, 2, 5, 3)
+"""Where g2o's I11 I12 I13 I22 I23 I33 stand among TORO's Ixx Ixy Iyy Itt Ixt Iyt."""
 
 
 class GraphFileError(ValueError):
@@ -152,11 +163,12 @@ class _Records:
             return
         if tag not in FIELD_COUNTS:
             raise GraphFileError(f"{where}: unsupported record {tag!r}; a planar pose "
-                                 f"graph has only VERTEX_SE2, EDGE_SE2 and FIX")
+                                 f"graph has only VERTEX_SE2, EDGE_SE2 and FIX (or TORO's "
+                                 f"VERTEX2 and EDGE2)")
         if len(fields) != FIELD_COUNTS[tag]:
             raise GraphFileError(f"{where}: {tag} has {len(fields)} fields, "
                                  f"expected {FIELD_COUNTS[tag]}")
-        if tag == "VERTEX_SE2":
+        if tag in ("VERTEX_SE2", "VERTEX2"):
             vertex = _vertex_id(fields[1], where)
             if vertex in self.vertices:
                 raise GraphFileError(f"{where}: vertex {vertex} defined twice "
@@ -166,8 +178,11 @@ class _Records:
         a, b = _vertex_id(fields[1], where), _vertex_id(fields[2], where)
         if a == b:
             raise GraphFileError(f"{where}: edge joins vertex {a} to itself")
+        values = _numbers(fields[3:12], where)
+        if tag == "EDGE2":
+            values = values[:3] + [values[3 + k] for k in TORO_TO_G2O_INFORMATION]
         self.edge_ids.append((a, b))
-        self.edge_values.append(_numbers(fields[3:12], where))
+        self.edge_values.append(values)
         self.edge_lines.append(number)
 
 

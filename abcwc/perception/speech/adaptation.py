@@ -33,7 +33,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from abcwc.perception.speech.audio import SAMPLE_RATE, to_float_audio, to_int16, with_noise_floor
+from abcwc.perception.speech.audio import SAMPLE_RATE, for_decoding, to_int16
 from abcwc.perception.speech.model import decoded, model_paths
 
 STREAMS, DIMENSIONS, GAUSSIANS = 3, 13, 128
@@ -179,7 +179,7 @@ def enroll(readings: Sequence[tuple[np.ndarray, str]], rate: int = SAMPLE_RATE,
                       if checker.lookup_word(w) is None})
     if unknown:
         raise ValueError(f"not in the pronunciation dictionary: {', '.join(unknown)}")
-    pcms = [to_int16(with_noise_floor(to_float_audio(audio, rate))).tobytes()
+    pcms = [to_int16(for_decoding(audio, rate)).tobytes()
             for audio, _ in readings]
     transform = None
     with tempfile.TemporaryDirectory() as work:

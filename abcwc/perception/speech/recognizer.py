@@ -33,7 +33,13 @@ So each answer is checked twice before the chair obeys it.
 2. **Nothing else was said.** A frame is speech when its energy is 12 dB above the
    utterance's quietest frames; at most ``max_outside_speech`` of the speech frames may
    lie outside the command's words. "stop worrying about it" aligns "stop" to its first
-   word and calls the rest silence; this check refuses it. When the grammar draws a
+   word and calls the rest silence; this check refuses it. A room's echo is not speech:
+   after the command's last word, frames whose energy only falls (smoothed over 30 ms,
+   never ``ONSET_RISE_DB`` above the quietest frame since the command ended) are its
+   reverberant tail, and are not counted; a new word is an onset, a rise of more than
+   that (measured with a synthetic room of RT60 0.4 s on the held-out speakers: 66 % of
+   the commands were refused for their own echo, 92 % recognised without it, the same
+   as in a dry room, with no more sentences let through). When the grammar draws a
    command out over a whole sentence ("I forgot to go to the store" heard as "drive
    reverse", "reverse" stretched over "go to the store"), no speech lies outside it,
    but its long words fit badly, and the command's mean ratio, taken over all its
@@ -55,12 +61,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from abcwc.perception.speech.adaptation import MeanTransform
-from abcwc.perception.speech.audio import SAMPLE_RATE, to_float_audio, to_int16, with_noise_floor
+from abcwc.perception.speech.audio import SAMPLE_RATE, for_decoding, to_int16
 from abcwc.perception.speech.commands import CommandSet, SpokenCommand
 from abcwc.perception.speech.model import decoded, model_paths
 
 FRAME_RATE = 100          # pocketsphinx's feature frames per second
 SPEECH_ABOVE_FLOOR_DB = 12.0
+ONSET_RISE_DB = 3.0       # dB a frame's energy must rise over the tail's lowest: new speech
 
 
 @dataclass(frozen=True)
@@ -113,8 +120,12 @@ class Verification:
     left out of the choice: formant voices no rider has, whose commands score -5 to -7
     per frame, pull the thresholds down to where conversation passes (measured once
     both ways, the held-out speakers' commands were recognised 88 % of the time with
-    them in the choice, 92 % without). ``Verification.none()`` checks nothing: the grammar's
-    answer as it comes."""
+    them in the choice, 92 % without). Tuned again since the decoder hears no DC offset,
+    a floor below quiet speech and no echo as speech (``audio.for_decoding``,
+    ``speech_outside_fraction``), the choice moves only the single-word bound, to -6.75:
+    one tuning command more (95.6 % against 94.8 %), and the same figures to the last
+    utterance on the held-out speakers, quiet and at 20 dB SNR; the bound is kept.
+    ``Verification.none()`` checks nothing: the grammar's answer as it comes."""
 
     min_mean_llr: float = -6.0
     min_word_llr: float = -8.5
@@ -201,7 +212,7 @@ class CommandRecognizer:
     def recognise(self, samples: np.ndarray, rate: int = SAMPLE_RATE) -> Recognition:
         """The command in one utterance, or None with the reason it was refused."""
         started = time.perf_counter()
-        x = with_noise_floor(to_float_audio(samples, rate), seed=self.noise_floor_seed)
+        x = for_decoding(samples, rate, seed=self.noise_floor_seed)
         pcm = to_int16(x).tobytes()
         phrase, words = self._decode_words(pcm)
         llrs: tuple[tuple[str, float], ...] = ()
@@ -263,13 +274,20 @@ def speech_outside_fraction(x: np.ndarray, first: int, last: int) -> float:
     """The fraction of the speech frames of ``x`` (float audio at 16 kHz) that lie
     outside frames ``first``..``last`` (inclusive, 10 ms each). A frame is speech when
     its energy (dB) is ``SPEECH_ABOVE_FLOOR_DB`` over the 10th percentile of the
-    utterance's frames: module notes, check 2."""
+    utterance's frames; the frames after ``last`` whose (30 ms smoothed) energy never
+    rises ``ONSET_RISE_DB`` over the lowest since ``last`` are the command's echo, not
+    speech outside it: module notes, check 2."""
     hop = SAMPLE_RATE // FRAME_RATE
     n = x.size // hop
     energy = 10 * np.log10(np.mean(x[: n * hop].reshape(n, hop) ** 2, axis=1) + 1e-12)
     speech = energy > np.percentile(energy, 10) + SPEECH_ABOVE_FLOOR_DB
     if not speech.any():
         return 0.0
+    end = min(last + 1, n)  # the first frame after the command
+    smooth = np.convolve(energy, np.ones(3) / 3, mode="same")[end - 1:] if end > 0 else []
+    lowest = np.minimum.accumulate(smooth) if len(smooth) else smooth
+    onset = np.flatnonzero(np.asarray(smooth) > np.asarray(lowest) + ONSET_RISE_DB)
+    tail_end = end + int(onset[0]) - 1 if len(onset) else n  # the echo runs up to here
     frames = np.arange(n)
-    outside = speech & ((frames < first) | (frames > last))
+    outside = speech & ((frames < first) | (frames >= tail_end))
     return float(outside.sum() / speech.sum())

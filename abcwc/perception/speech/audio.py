@@ -43,7 +43,7 @@ MAX_CLIPPED_FRACTION = 0.01   # of samples at full scale
 NOISE_FLOOR = 1.0e-3          # RMS of full scale (-60 dBFS), a quiet room's hiss
 FLOOR_BELOW_SPEECH_DB = 35.0  # dB the added floor stays below the speech (-60 dBFS is
                               # that below speech at -25 dBFS, a talker near the microphone)
-LEVEL_FRAME = 160             # samples (10 ms at 16 kHz) per frame of speech_level
+FRAME_RATE = 100              # pocketsphinx's feature frames per second (10 ms each)
 
 
 class AudioError(ValueError):
@@ -125,14 +125,21 @@ def to_float_audio(samples: np.ndarray, rate: int) -> np.ndarray:
     return x
 
 
+def frame_powers(x: np.ndarray) -> np.ndarray:
+    """The mean square (of full scale) of each whole 10 ms frame of ``x`` (float audio at
+    16 kHz), the decoder's frames."""
+    hop = SAMPLE_RATE // FRAME_RATE
+    n = x.size // hop
+    return np.mean(x[: n * hop].reshape(n, hop) ** 2, axis=1)
+
+
 def speech_level(x: np.ndarray) -> float:
     """RMS (of full scale) of the loudest tenth of ``x``'s 10 ms frames (float audio at
-    16 kHz): the level of the speech in it, whatever silence or noise surrounds it (the
-    idea of ITU-T P.56's active speech level, the loud frames standing for the active
-    ones)."""
-    n = max(x.size // LEVEL_FRAME, 1)
-    frames = x[: n * LEVEL_FRAME].reshape(n, -1) if x.size >= LEVEL_FRAME else x[None]
-    return math.sqrt(float(np.percentile(np.mean(frames * frames, axis=1), 90)))
+    16 kHz; one frame of it all if shorter): the level of the speech in it, whatever
+    silence or noise surrounds it (the idea of ITU-T P.56's active speech level, the loud
+    frames standing for the active ones)."""
+    powers = frame_powers(x) if x.size >= SAMPLE_RATE // FRAME_RATE else np.mean(x ** 2)
+    return math.sqrt(float(np.percentile(powers, 90)))
 
 
 def for_decoding(samples: np.ndarray, rate: int, seed: int = 0) -> np.ndarray:

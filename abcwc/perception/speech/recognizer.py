@@ -61,11 +61,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from abcwc.perception.speech.adaptation import MeanTransform
-from abcwc.perception.speech.audio import SAMPLE_RATE, for_decoding, to_int16
+from abcwc.perception.speech.audio import SAMPLE_RATE, for_decoding, frame_powers, to_int16
 from abcwc.perception.speech.commands import CommandSet, SpokenCommand
 from abcwc.perception.speech.model import decoded, model_paths
 
-FRAME_RATE = 100          # pocketsphinx's feature frames per second
 SPEECH_ABOVE_FLOOR_DB = 12.0
 ONSET_RISE_DB = 3.0       # dB a frame's energy must rise over the tail's lowest: new speech
 
@@ -277,17 +276,15 @@ def speech_outside_fraction(x: np.ndarray, first: int, last: int) -> float:
     utterance's frames; the frames after ``last`` whose (30 ms smoothed) energy never
     rises ``ONSET_RISE_DB`` over the lowest since ``last`` are the command's echo, not
     speech outside it: module notes, check 2."""
-    hop = SAMPLE_RATE // FRAME_RATE
-    n = x.size // hop
-    energy = 10 * np.log10(np.mean(x[: n * hop].reshape(n, hop) ** 2, axis=1) + 1e-12)
+    energy = 10 * np.log10(frame_powers(x) + 1e-12)
+    n = energy.size
     speech = energy > np.percentile(energy, 10) + SPEECH_ABOVE_FLOOR_DB
     if not speech.any():
         return 0.0
-    end = min(last + 1, n)  # the first frame after the command
-    smooth = np.convolve(energy, np.ones(3) / 3, mode="same")[end - 1:] if end > 0 else []
-    lowest = np.minimum.accumulate(smooth) if len(smooth) else smooth
-    onset = np.flatnonzero(np.asarray(smooth) > np.asarray(lowest) + ONSET_RISE_DB)
-    tail_end = end + int(onset[0]) - 1 if len(onset) else n  # the echo runs up to here
+    final = min(last, n - 1)  # the command's last frame
+    smooth = np.convolve(energy, np.ones(3) / 3, mode="same")[final:]
+    onset = np.flatnonzero(smooth > np.minimum.accumulate(smooth) + ONSET_RISE_DB)
+    tail_end = final + int(onset[0]) if len(onset) else n  # the echo runs up to here
     frames = np.arange(n)
     outside = speech & ((frames < first) | (frames >= tail_end))
     return float(outside.sum() / speech.sum())

@@ -32,14 +32,18 @@ Given a goal (a pose, an ``(x, y)``, or a named place of the world), the navigat
 6. **recovers** when no safe trajectory is left or the chair has come no
    ``oscillation_distance`` nearer the goal (the least way left on the map) in
    ``oscillation_timeout`` s (Nav2's progress checker, judged by the goal): it waits
-   ``controller_patience`` s for the way to clear (people move), then recovers, in
+   ``controller_patience`` s for the way to clear (people move), counted from when it
+   was first blocked there (a chair that inches on between refusals has not got away
+   until it is ``oscillation_distance`` from where it stood), then recovers, in
    order (after Nav2's recovery tree): backs off a little if the IR ring sees the way
    behind clear (else turns on the spot), clears the local costmap's sonar and IR marks,
    lines up with the gap ahead (door mode for it) if the map says the chair fits it and
    it was entered askew, closes the gap ahead and plans round it if the map has a way
-   round, backs off again; after ``max_recoveries`` recoveries without progress it gives
-   up with the reason. A walker in the way is waited for (``people_patience`` s) before
-   each of these: a way that people shut is no proof that it is too narrow.
+   round, or, where the gap is the only way and nobody is in it, gives up there (the
+   same refusal would follow another try); backs off again; after ``max_recoveries``
+   recoveries without progress it gives up with the reason. A walker in the way is
+   waited for (``people_patience`` s) before each of these: a way that people shut is no
+   proof that it is too narrow.
 
 It ends **succeeded**, or **failed** with a reason a person can act on: the goal is
 off the map or in a wall, no path leads there, no passable way (naming the gap: "the
@@ -444,8 +448,11 @@ class Navigator(BehaviourBase):
         # evading that gets nowhere for oscillation_timeout s is being stuck, too: a
         # person who stands in a doorway would keep the chair out of her way for ever
         if not result.stuck and not no_progress:
-            self._blocked_since = None
             self._phase = "driving"
+            if self._blocked_since is not None and self._blocked_where is not None and \
+                    math.hypot(pose.x - self._blocked_where.x,
+                               pose.y - self._blocked_where.y) > s.oscillation_distance:
+                self._blocked_since = None  # it got away from where it was blocked
             return self._slowed_for_the_goal(self._regulated(result, pose), pose)
         return self._blocked(frame, pose)
 
@@ -564,6 +571,7 @@ class Navigator(BehaviourBase):
         self._next_plan = -math.inf
         self._plan_failing_since: float | None = None
         self._blocked_since: float | None = None
+        self._blocked_where: Pose2D | None = None  # where the chair stood when blocked
         self._recovery: tuple[str, float, Pose2D] | None = None
         self._recoveries = 0
         self._people_wait_since: float | None = None  # blocked by people since, s
@@ -907,7 +915,7 @@ class Navigator(BehaviourBase):
         """No safe trajectory (or no progress): wait for the way to clear, then recover."""
         s = self.settings
         if self._blocked_since is None:
-            self._blocked_since = frame.t
+            self._blocked_since, self._blocked_where = frame.t, pose
             self._next_plan = frame.t  # plan round what blocks it at the next decision
         if frame.t - self._blocked_since < s.controller_patience:
             self._phase = "waiting for the way to clear"
@@ -931,10 +939,7 @@ class Navigator(BehaviourBase):
                           f"{self._recoveries} recoveries")
                 return Twist(0.0, 0.0)
             if self._only_way is not None:
-                self.fail(f"no passable way to the goal: the chair found no safe way through "
-                          f"{self._only_way.describe()} ({self._recoveries} recoveries), and "
-                          f"no other way leads there")
-                return Twist(0.0, 0.0)
+                return self._no_way_through(self._only_way)
             gap = self._gap_ahead(pose)
             where = f" at {gap.describe()}" if gap else ""
             self.fail(f"stuck{where}: no safe way on after {self._recoveries} recoveries")
@@ -967,8 +972,12 @@ class Navigator(BehaviourBase):
             if self.running:  # a new way: progress and the count are measured along it
                 self._best_remaining = self._stuck_at = self._to_go(pose)
             return Twist(0.0, 0.0)
-        if gap is not None:  # the only way: keep trying it (people move), then give up
+        if gap is not None:  # the only way: keep trying it while people are in it
             self._only_way = gap
+            if not people:
+                # refused in door mode after a back-off and a cleared costmap, with no way
+                # round and nobody in it who might move: another try would find the same
+                return self._no_way_through(gap)
         behind, _ = self.stopping.clearance(frame, forward=False)
         back = compose(pose, (-s.back_off_distance, 0.0, 0.0))
         if (behind > s.back_off_distance + self.stopping.braking_distance(s.back_off_speed)
@@ -983,6 +992,13 @@ class Navigator(BehaviourBase):
             return Twist(0.0, 0.0)
         self._used(self._recovery[0])
         return self._recover(frame, pose)
+
+    def _no_way_through(self, gap: Gap) -> Twist:
+        """Fail: ``gap`` is the only way, and the chair found no safe way through it."""
+        self.fail(f"no passable way to the goal: the chair found no safe way through "
+                  f"{gap.describe()} ({self._recoveries} recoveries), and no other way "
+                  f"leads there")
+        return Twist(0.0, 0.0)
 
     def _person_in_the_way(self, pose: Pose2D) -> bool:
         """Whether a tracked person (one seen walking: :meth:`PeopleTracker.walkers`)

@@ -465,8 +465,9 @@ def build_parser() -> argparse.ArgumentParser:
                            help=f"folder to write {POSEGRAPH_FILE} in: the graph with its "
                                 "optimised poses (default: write nothing)")
     posegraph.add_argument("--robust", choices=["huber", "cauchy"], help="robust kernel")
-    posegraph.add_argument("--initial", choices=["lago", "given"], default="lago",
-                           help="start from LAGO's estimate (default) or the file's poses")
+    posegraph.add_argument("--initial", choices=["chordal", "lago", "given"], default="chordal",
+                           help="start from the chordal estimate (default), LAGO's, or the "
+                                "file's poses")
     posegraph.add_argument("--max-iterations", type=int, default=100)
     _json_option(posegraph)
     posegraph.set_defaults(run=_posegraph)

@@ -153,6 +153,33 @@ def test_where_no_way_fits_it_fails_at_once_naming_the_gap(tmp_path):
     assert needs == pytest.approx(_chair_needs(), abs=0.005)
 
 
+def test_a_gap_wide_enough_across_but_at_an_angle_to_the_cells_is_named_as_such(tmp_path):
+    """A 0.82 m door in a building turned by 20 degrees: across it the wall cells lie
+    0.81 m apart, more than the chair's 0.76 m, but no cell of the map lies the passing
+    radius from both its sides. The reason must not say that 0.81 m is narrower than
+    0.76 m."""
+    turn = math.radians(20.0)
+    c, s = math.cos(turn), math.sin(turn)
+    _door_world(tmp_path, 0.82, way_round=False)
+    raw = json.loads((tmp_path / "door_0.82.json").read_text())
+    raw["walls"] = [[[c * x - s * y, s * x + c * y] for x, y in line] for line in raw["walls"]]
+    raw["places"] = {name: [c * x - s * y, s * x + c * y, heading + turn]
+                     for name, (x, y, heading) in raw["places"].items()}
+    path = tmp_path / "turned.json"
+    path.write_text(json.dumps(raw))
+    navigator = Navigator.for_world(load_world(path))
+    navigator.go_to("office")
+    assert navigator.status is Status.FAILED
+    found = re.search(r"the (\d\.\d\d) m gap at \((-?\d+\.\d+), (-?\d+\.\d+)\) has no cell "
+                      r"of the map 0\.38 m from both its sides", navigator.failure or "")
+    assert found, navigator.failure
+    width, x, y = map(float, found.groups())
+    assert width >= minimum_clear_width(navigator.passing_radius)
+    door = (c * DOOR[0] - s * DOOR[1], s * DOOR[0] + c * DOOR[1])
+    assert math.hypot(x - door[0], y - door[1]) < 0.1
+    assert "narrower than" not in (navigator.failure or "")
+
+
 # ------------------------------------------------------------------ recoveries
 def _refusing_near_the_door(navigator: Navigator, inching: bool = False) -> None:
     """The local planner refuses every way while the chair is within 1.2 m of the door

@@ -766,12 +766,19 @@ class Navigator(BehaviourBase):
                 return f"no passable way to the goal: {refused}, and no other way leads there"
             return f"no path to the goal: {reason}"
         gap = narrowest_gap(self.static_map, squeezed.cells, self.passing_radius)
+        needs = minimum_clear_width(self.passing_radius)
         if gap is None:
             narrow = (f"the only way passes closer to a wall than the "
                       f"{self.passing_radius:.2f} m the chair's centre keeps")
+        elif gap.width < needs:
+            narrow = f"{gap.describe()} is narrower than the chair needs, {needs:.2f} m"
         else:
-            narrow = (f"{gap.describe()} is narrower than the chair needs, "
-                      f"{minimum_clear_width(self.passing_radius):.2f} m")
+            # wide enough across, but the map's cells cross it at an angle, and none of
+            # them lies the passing radius from both of its sides
+            narrow = (f"{gap.describe()} has no cell of the map {self.passing_radius:.2f} m "
+                      f"from both its sides, as the chair's centre needs (a gap at an "
+                      f"angle to the map's {self.static_map.resolution:.2f} m cells may "
+                      f"need a few cm more than {needs:.2f} m)")
         if refused:
             return f"no passable way to the goal: {refused}, and the other way: {narrow}"
         return f"no {'passable way' if gap else 'path'} to the goal: {narrow}"

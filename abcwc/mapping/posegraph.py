@@ -52,7 +52,7 @@ least squares of ``t_j - t_i = R(theta_i) t_z`` given those headings. On the MIT
 LM ends at chi2 770.2 from the file's poses and from LAGO, 41.21 from the chordal start;
 on the noisy M3500 graphs (Olson's Manhattan world with 0.1, 0.2 and 0.3 rad of added
 heading noise) 8310, 11074 and 9012 from LAGO, 912.2, 2055 and 4108 from the chordal
-start (GTSAM 4.3's LM reaches the same from the same starts). ``initial="lago"`` and
+start (GTSAM 4.3's LM reaches the same four from the chordal starts). ``initial="lago"`` and
 ``"given"`` start from LAGO's estimate or from the graph's poses themselves. Either way,
 the chi2 reported first is the one at the graph's poses.
 """

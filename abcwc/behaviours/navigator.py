@@ -79,6 +79,7 @@ from abcwc.navigation.costmap import (
     Costmap,
     chair_footprint,
     footprint_cost,
+    window_lattice,
 )
 from abcwc.navigation.dwa import DwaPlanner, DwaResult
 from abcwc.navigation.localization import MapLocalizer, occupied_points, wall_points
@@ -304,8 +305,7 @@ class Navigator(BehaviourBase):
         self.static_map = static_map
         # the local windows on the map's own cells where they can be (same resolution,
         # axis-aligned): else each window cell straddles map cells (Costmap.rolling_window)
-        self._lattice = static_map if (static_map.origin.theta == 0.0 and math.isclose(
-            static_map.resolution, self.settings.resolution)) else None
+        self._lattice = window_lattice(static_map, self.settings.resolution)
         self.global_costmap = self._inflated(static_map.cost.copy(), static_map)
         self._map_costmap = self.global_costmap  # without what avoid() added for a goal
         self.avoided = np.zeros(static_map.shape, dtype=bool)  # cells avoid() made walls

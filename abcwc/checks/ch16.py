@@ -42,6 +42,7 @@ from abcwc.navigation.costmap import (
     Footprint,
     chair_footprint,
     footprint_cost,
+    window_lattice,
 )
 from abcwc.navigation.dwa import DwaPlanner, DwaResult
 from abcwc.navigation.passages import minimum_clear_width
@@ -254,7 +255,7 @@ def door_decision(planner: DwaPlanner, static: Costmap, path: np.ndarray, pose: 
     """One DWA cycle at ``pose``: the 5 x 5 m local costmap cut from ``static`` (cells off
     it lethal) and the next 2 m of ``path`` from its point nearest the chair."""
     local = Costmap.rolling_window(pose, 5.0, static.resolution, default=FREE_SPACE,
-                                   lattice=static if static.origin.theta == 0.0 else None)
+                                   lattice=window_lattice(static, static.resolution))
     rows, cols = np.indices(local.shape)
     g_rows, g_cols = static.world_to_cell(local.cell_to_world(rows.ravel(), cols.ravel()))
     on_map = static.contains(g_rows, g_cols)

@@ -157,7 +157,7 @@ class Costmap(GridGeometry):
             raise ValueError(f"size must be a finite number > 0 m, got {size!r}")
         x_anchor = y_anchor = 0.0
         if lattice is not None:
-            if lattice.origin.theta != 0.0 or not math.isclose(lattice.resolution, resolution):
+            if window_lattice(lattice, resolution) is None:
                 raise ValueError(f"the lattice must be axis-aligned with the window's "
                                  f"resolution {resolution:g} m, got yaw "
                                  f"{lattice.origin.theta:g} rad and {lattice.resolution:g} m")
@@ -253,6 +253,14 @@ class Costmap(GridGeometry):
         self.cost = np.where(layer == NO_INFORMATION, master,
                              np.where(master == NO_INFORMATION, layer,
                                       np.maximum(master, layer))).astype(np.uint8)
+
+
+def window_lattice(grid: GridGeometry, resolution: float) -> GridGeometry | None:
+    """``grid`` if rolling windows of ``resolution`` m cells can lie on its cells
+    (:meth:`Costmap.rolling_window`'s ``lattice``: axis-aligned, the same resolution),
+    else None."""
+    same = grid.origin.theta == 0.0 and math.isclose(grid.resolution, resolution)
+    return grid if same else None
 
 
 # --------------------------------------------------------------------- footprint checks

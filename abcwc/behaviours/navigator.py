@@ -384,7 +384,7 @@ class Navigator(BehaviourBase):
         self.avoided |= new
         self.global_costmap = self._with_obstacles(new)
         self._next_plan = -math.inf
-        self._blocked_since = None
+        self._blocked_at = None
         self._phase = "planning round what blocks the way"
         return int(new.sum())
 
@@ -449,10 +449,10 @@ class Navigator(BehaviourBase):
         # person who stands in a doorway would keep the chair out of her way for ever
         if not result.stuck and not no_progress:
             self._phase = "driving"
-            if self._blocked_since is not None and self._blocked_where is not None and \
-                    math.hypot(pose.x - self._blocked_where.x,
-                               pose.y - self._blocked_where.y) > s.oscillation_distance:
-                self._blocked_since = None  # it got away from where it was blocked
+            if self._blocked_at is not None and math.hypot(
+                    pose.x - self._blocked_at[1].x, pose.y - self._blocked_at[1].y
+            ) > s.oscillation_distance:
+                self._blocked_at = None  # it got away from where it was blocked
             return self._slowed_for_the_goal(self._regulated(result, pose), pose)
         return self._blocked(frame, pose)
 
@@ -570,8 +570,7 @@ class Navigator(BehaviourBase):
         self._timeout = math.inf
         self._next_plan = -math.inf
         self._plan_failing_since: float | None = None
-        self._blocked_since: float | None = None
-        self._blocked_where: Pose2D | None = None  # where the chair stood when blocked
+        self._blocked_at: tuple[float, Pose2D] | None = None  # since when, and where it stood
         self._recovery: tuple[str, float, Pose2D] | None = None
         self._recoveries = 0
         self._people_wait_since: float | None = None  # blocked by people since, s
@@ -921,10 +920,10 @@ class Navigator(BehaviourBase):
     def _blocked(self, frame: SensorFrame, pose: Pose2D) -> Twist:
         """No safe trajectory (or no progress): wait for the way to clear, then recover."""
         s = self.settings
-        if self._blocked_since is None:
-            self._blocked_since, self._blocked_where = frame.t, pose
+        if self._blocked_at is None:
+            self._blocked_at = (frame.t, pose)
             self._next_plan = frame.t  # plan round what blocks it at the next decision
-        if frame.t - self._blocked_since < s.controller_patience:
+        if frame.t - self._blocked_at[0] < s.controller_patience:
             self._phase = "waiting for the way to clear"
             return Twist(0.0, 0.0)
         people = self._person_in_the_way(pose)
@@ -952,7 +951,7 @@ class Navigator(BehaviourBase):
             self.fail(f"stuck{where}: no safe way on after {self._recoveries} recoveries")
             return Twist(0.0, 0.0)
         self._recoveries += 1
-        self._blocked_since = None
+        self._blocked_at = None
         self._anchor = (frame.t, pose)
         self._stuck_at = min(self._stuck_at, self._to_go(pose))
         if self._recoveries == 2:  # the second: forget what the rangers marked, re-plan

@@ -316,7 +316,7 @@ def _check_anchored(graph: PoseGraph) -> None:
     """ValueError unless every pose is joined by edges to a fixed pose (else H is
     singular: nothing says where the unjoined poses are)."""
     n = len(graph.ids)
-    fixed = graph.fixed if len(graph.fixed) else np.array([0])
+    fixed = _fixed_poses(graph)
     adjacency = sp.coo_matrix((np.ones(len(graph.edges)), (graph.i, graph.j)), shape=(n, n))
     _, component = connected_components(adjacency, directed=False)
     loose = np.nonzero(~np.isin(component, component[fixed]))[0]
@@ -342,7 +342,7 @@ def optimise(graph: PoseGraph, *, robust: str | None = None,
     """
     _check_options(graph, robust, robust_width, max_iterations, relative_tolerance, initial)
     start = time.perf_counter()
-    fixed = graph.fixed if len(graph.fixed) else np.array([0])
+    fixed = _fixed_poses(graph)
     poses = {"given": lambda g: g.poses.copy(), "lago": lago, "chordal": chordal}[initial](graph)
     chi2_initial = chi2(graph.poses, graph)
     chi2_start = chi2_initial if initial == "given" else chi2(poses, graph)
@@ -429,7 +429,7 @@ def lago(graph: PoseGraph) -> np.ndarray:
     headings, the whole turns taken from the given poses, then for the positions given
     the headings (:func:`positions_given_headings`); pose 0 (or the fixed poses) stay
     where the graph has them."""
-    fixed = graph.fixed if len(graph.fixed) else np.array([0])
+    fixed = _fixed_poses(graph)
     i, j, z = graph.i, graph.j, graph.measurements
     # headings: theta_j - theta_i = z_theta + 2 pi k, k from the given headings
     wraps = np.round((graph.poses[j, 2] - graph.poses[i, 2] - z[:, 2]) / (2 * math.pi))
@@ -448,15 +448,11 @@ def chordal(graph: PoseGraph) -> np.ndarray:
     the edge's heading information, and the fixed poses hold theirs. That is linear in
     the ``c_i``, with no whole turns to guess; its least squares (sparse LU of the normal
     equations) are taken back to angles by ``atan2``."""
-    fixed = graph.fixed if len(graph.fixed) else np.array([0])
-    n, i, j, m = len(graph.ids), graph.i, graph.j, len(graph.i)
-    free = np.ones(n, dtype=bool)
-    free[fixed] = False
-    variable = np.full(n, -1)
-    variable[free] = np.arange(free.sum())
+    i, j, m = graph.i, graph.j, len(graph.i)
+    free, variable = _unknowns(len(graph.ids), _fixed_poses(graph))
     anchor = np.column_stack([np.cos(graph.poses[:, 2]), np.sin(graph.poses[:, 2])])
     c, s = np.cos(graph.measurements[:, 2]), np.sin(graph.measurements[:, 2])
-    turn = np.stack([np.stack([c, -s], 1), np.stack([s, c], 1)], 1)   # R(theta_z), (M, 2, 2)
+    turn = _rotations(c, s)  # R(theta_z)
     weight = np.sqrt(_heading_information(graph))
     # residual of edge k, rows 2k and 2k + 1: weight (c_j - R(theta_z) c_i)
     edge, axis = np.arange(m)[:, None, None], np.arange(2)
@@ -475,8 +471,7 @@ def chordal(graph: PoseGraph) -> np.ndarray:
                                                       np.concatenate(cols))),
                            shape=(2 * m, 2 * int(free.sum()))).tocsc()
     rhs = design.T @ (-(weight[:, None] * known).ravel())
-    solution = spla.splu((design.T @ design).tocsc(), permc_spec="MMD_AT_PLUS_A",
-                         diag_pivot_thresh=0.0, options={"SymmetricMode": True}).solve(rhs)
+    solution = _solve_symmetric((design.T @ design).tocsc(), rhs)
     theta = graph.poses[:, 2].astype(float).copy()
     unit = solution.reshape(-1, 2)
     theta[free] = np.arctan2(unit[:, 1], unit[:, 0])
@@ -487,16 +482,44 @@ def positions_given_headings(graph: PoseGraph, theta: np.ndarray) -> np.ndarray:
     """Poses (N, 3): the headings ``theta`` (rad) and the positions that are the linear
     least squares of ``t_j - t_i = R(theta_i) t_z``, with each edge's translation
     information turned into the world frame; the fixed poses keep theirs."""
-    fixed = graph.fixed if len(graph.fixed) else np.array([0])
+    fixed = _fixed_poses(graph)
     i, j, z = graph.i, graph.j, graph.measurements
     c, s = np.cos(theta[i]), np.sin(theta[i])
     shift = np.stack([c * z[:, 0] - s * z[:, 1], s * z[:, 0] + c * z[:, 1]], axis=1)
-    rotation = np.stack([np.stack([c, -s], 1), np.stack([s, c], 1)], 1)  # R(theta_i)
+    rotation = _rotations(c, s)  # R(theta_i)
     info_xy = np.linalg.inv(np.linalg.inv(graph.information)[:, :2, :2])
     info_world = rotation @ info_xy @ np.swapaxes(rotation, 1, 2)
     xy = _anchored_least_squares(len(graph.ids), i, j, shift, info_world, fixed,
                                  graph.poses[:, :2])
     return np.column_stack([xy, wrap_angle(theta)])
+
+
+def _fixed_poses(graph: PoseGraph) -> np.ndarray:
+    """The indices of the poses held in place: the graph's ``FIX`` poses, or pose 0."""
+    return graph.fixed if len(graph.fixed) else np.array([0])
+
+
+def _unknowns(n: int, fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Of ``n`` poses with ``fixed`` held: which are free (N,) bool, and each one's
+    number among the free ones (N,) (-1 for the fixed)."""
+    free = np.ones(n, dtype=bool)
+    free[fixed] = False
+    variable = np.full(n, -1)
+    variable[free] = np.arange(free.sum())
+    return free, variable
+
+
+def _rotations(c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """(M, 2, 2) the rotation matrices of the angles whose cosines and sines are ``c``
+    and ``s``."""
+    return np.stack([np.stack([c, -s], 1), np.stack([s, c], 1)], 1)
+
+
+def _solve_symmetric(matrix: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
+    """``matrix x = rhs`` for a symmetric positive definite sparse ``matrix``: SuperLU
+    in symmetric mode, its minimum-degree order on ``A^T + A``."""
+    return spla.splu(matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                     options={"SymmetricMode": True}).solve(rhs)
 
 
 def _heading_information(graph: PoseGraph) -> np.ndarray:
@@ -512,10 +535,7 @@ def _anchored_least_squares(n: int, i: np.ndarray, j: np.ndarray, target: np.nda
     rows held at ``anchor``'s values: the normal equations, block by block, solved by
     sparse LU."""
     d = target.shape[1]
-    free = np.ones(n, dtype=bool)
-    free[fixed] = False
-    variable = np.full(n, -1)
-    variable[free] = np.arange(free.sum())
+    free, variable = _unknowns(n, fixed)
     known = anchor[j] * ~free[j][:, None] - anchor[i] * ~free[i][:, None]
     weighted = information @ (target - known)[:, :, None]                 # W (t - known)
     rd = np.arange(d)
@@ -536,8 +556,7 @@ def _anchored_least_squares(n: int, i: np.ndarray, j: np.ndarray, target: np.nda
         ok = variable[va] >= 0
         np.add.at(rhs, (d * variable[va][ok, None] + rd).ravel(),
                   sign * weighted[ok, :, 0].ravel())
-    solution = spla.splu(normal, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                         options={"SymmetricMode": True}).solve(rhs)
+    solution = _solve_symmetric(normal, rhs)
     out = anchor.astype(float).copy()
     out[free] = solution.reshape(-1, d)
     return out

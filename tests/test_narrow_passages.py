@@ -8,6 +8,7 @@ joined by one door in the wall at x = 6 m, and a corridor to the north, entered 
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import re
@@ -187,7 +188,7 @@ def _refusing_near_the_door(navigator: Navigator, inching: bool = False) -> None
     ``inching``: every third cycle there it lets one creeping command through (2 cm/s
     ahead), as a local planner at the edge of what it allows does."""
     plan_for_real = navigator.dwa.plan
-    cycles = iter(range(10**9))
+    cycles = itertools.count()
 
     def refusing(costmap, pose, *args, **kwargs) -> DwaResult:
         result = plan_for_real(costmap, pose, *args, **kwargs)

@@ -239,6 +239,26 @@ def test_animate_run_and_save_gif(lab_run, tmp_path):
         assert gif.n_frames == len(anim.frame_rows)
 
 
+@pytest.mark.parametrize("options", [{}, {"zoom": 1.0, "scans": False, "trail": False}])
+def test_the_gif_drawn_by_blitting_is_matplotlib_s_own_frame_for_frame(lab_run, tmp_path,
+                                                                      options):
+    """save_animation draws only the moving artists over a still picture; matplotlib's
+    PillowWriter redraws the whole figure for every frame. The frames must be the same,
+    pixel for pixel, and the animation must still draw whole frames afterwards."""
+    _, log = lab_run
+    anim = viz.animate_run(log, "lab", max_frames=12, **options)
+    ours = viz.save_animation(anim, tmp_path / "ours.gif")
+    anim.save(tmp_path / "theirs.gif", writer=writers["pillow"](fps=10))
+    with Image.open(ours) as a, Image.open(tmp_path / "theirs.gif") as b:
+        assert a.n_frames == b.n_frames == len(anim.frame_rows) > 1
+        assert a.info["duration"] == b.info["duration"] == 100
+        for k in range(a.n_frames):
+            a.seek(k)
+            b.seek(k)
+            assert np.array_equal(np.asarray(a.convert("RGB")), np.asarray(b.convert("RGB")))
+    assert "data:image/png;base64" in viz.to_html(anim)
+
+
 def test_to_html_and_save_errors(lab_run, tmp_path):
     _, log = lab_run
     anim = viz.animate_run(log, "lab", stride=len(log))

@@ -72,6 +72,7 @@ class _RunScene:
                 dots = ax.scatter([], [], s=4, color=color, linewidths=0, zorder=5)
                 self.scans.append((name, mount, dots))
         self.chair = ChairArtist(ax, params)
+        self.figure = ax.figure
         self.name = ax.get_title()
         self.clock = ax.title
 
@@ -124,6 +125,7 @@ def animate_run(log: RunLog, world: World | str | None = None,
                                    init_func=lambda: scene.draw(int(rows[0])),
                                    interval=1000.0 / fps, blit=False)
     anim.frame_rows = rows
+    anim.scene = scene  # for save_animation's GIF, drawn a frame's moving artists at a time
     fig.canvas.draw()  # lay the figure out once, then keep that layout for every frame
     fig.set_layout_engine(None)
     plt.close(fig)
@@ -143,6 +145,9 @@ def save_animation(anim: animation.Animation, path: str | Path, fps: float | Non
     """
     path = Path(path)
     suffix = path.suffix.lower()
+    scene = getattr(anim, "scene", None)
+    if suffix == ".gif" and isinstance(scene, _RunScene) and dpi in (None, scene.figure.dpi):
+        return _save_gif_by_blitting(anim, scene, path, fps or _fps(anim))
     if suffix == ".gif":
         writer: animation.AbstractMovieWriter = animation.PillowWriter(fps=fps or _fps(anim))
     elif suffix == ".mp4":
@@ -155,6 +160,39 @@ def save_animation(anim: animation.Animation, path: str | Path, fps: float | Non
         raise ValueError(f"cannot write {path}: unknown animation format {suffix or '(none)'!r};"
                          " use .gif or .mp4")
     anim.save(str(path), writer=writer, dpi=dpi)
+    return path
+
+
+def _save_gif_by_blitting(anim: animation.FuncAnimation, scene: _RunScene, path: Path,
+                          fps: float) -> Path:
+    """An :func:`animate_run` animation as a GIF, the same frames as matplotlib's
+    ``PillowWriter`` writes, drawn faster: the still figure (world, axes, labels) once,
+    then for each frame that picture restored and only the artists the frame moves drawn
+    over it (matplotlib's blitting)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    figure = scene.figure
+    moving = scene.draw(int(anim.frame_rows[0]))
+    shown_on = figure.canvas
+    try:
+        for artist in moving:
+            artist.set_animated(True)  # left out of the still picture
+        canvas = FigureCanvasAgg(figure)
+        canvas.draw()
+        still = canvas.copy_from_bbox(figure.bbox)
+        frames = []
+        for row in anim.frame_rows:
+            canvas.restore_region(still)
+            for artist in sorted(scene.draw(int(row)), key=Artist.get_zorder):
+                figure.draw_artist(artist)
+            frames.append(Image.fromarray(np.asarray(canvas.buffer_rgba())[..., :3].copy()))
+    finally:
+        for artist in moving:
+            artist.set_animated(False)
+        figure.set_canvas(shown_on)
+    frames[0].save(path, save_all=True, append_images=frames[1:], duration=int(1000 / fps),
+                   loop=0)
     return path
 
 

@@ -78,6 +78,53 @@ def test_scan_is_a_laser_scan_with_inf_for_no_return(tmp_path):
     np.testing.assert_allclose(scan.angles, np.linspace(-math.pi / 2, math.pi / 2, 5))
 
 
+def flaser_line(ranges: list[float], stamp: float = 1.0) -> str:
+    pose = "0.0 0.0 0.0 0.0 0.0 0.0"
+    return (f"FLASER {len(ranges)} {' '.join(f'{r:.2f}' for r in ranges)} {pose} "
+            f"{stamp:.6f} host {stamp:.6f}")
+
+
+@pytest.mark.parametrize(("beams", "degrees"), [
+    (181, 1.0), (180, 1.0), (361, 0.5), (360, 0.5), (401, 0.25), (400, 0.25), (5, 45.0),
+])
+def test_flaser_beams_are_as_far_apart_as_carmen_s_own_reader_has_them(tmp_path, beams,
+                                                                       degrees):
+    """CARMEN's readlog.c (carmen_laser_guess_angle_increment): a SICK's 180 or 181
+    readings are 1 degree apart from -90 degrees (180: the last beam, at +90, is not
+    logged), 360 or 361 half a degree, 400 or 401 a quarter; other counts span 180
+    degrees. A wall 2 m to the left shows in the beam that points there."""
+    path = tmp_path / "sick.clf"
+    left = round(90.0 / degrees) if beams % 2 else round(89.0 / degrees)  # a beam <= +90
+    ranges = [30.0] * beams
+    ranges[left] = 2.0
+    path.write_text(flaser_line(ranges) + "\n")
+    log = read_carmen_log(path)
+    np.testing.assert_allclose(log.angle_increment, math.radians(degrees))
+    np.testing.assert_allclose(log.angle_min, -math.pi / 2)
+    angle = math.radians(-90.0 + left * degrees)
+    assert min(np.hypot(*(log.points(0) - [2 * math.cos(angle), 2 * math.sin(angle)]).T)
+               ) < 1e-9
+
+
+def test_flaser_range_and_spacing_from_the_log_s_own_params(tmp_path):
+    """A log that states its front laser's maximum range and resolution (CARMEN's
+    ``robot_front_laser_max`` and ``laser_front_laser_resolution`` PARAMs) is read by
+    them; a smaller ``max_range`` given to the reader still wins; a PARAM that is not a
+    number > 0 is refused, naming its line."""
+    path = tmp_path / "params.clf"
+    params = ("PARAM robot_front_laser_max 8.0 host 0\n"
+              "PARAM laser_front_laser_resolution 2.0 host 0\n")
+    path.write_text(params + flaser_line([1.0, 7.9, 8.0, 9.5, 3.0]) + "\n")
+    log = read_carmen_log(path)
+    np.testing.assert_allclose(log.angle_increment, math.radians(2.0))
+    np.testing.assert_allclose(log.range_max, 8.0)
+    np.testing.assert_array_equal(log.ranges.mask[0], [False, False, True, True, False])
+    np.testing.assert_allclose(read_carmen_log(path, max_range=5.0).range_max, 5.0)
+    path.write_text("PARAM robot_front_laser_max -1 host 0\n" + flaser_line([1.0]) + "\n")
+    with pytest.raises(ValueError, match=r"line 1: robot_front_laser_max must be a number > 0"):
+        read_carmen_log(path)
+
+
 def test_gzipped_log_reads_like_the_plain_one(tmp_path):
     plain, packed = tmp_path / "a.clf", tmp_path / "a.clf.gz"
     plain.write_text(FLASER_LOG)

@@ -44,8 +44,10 @@ def test_on_aces_slam_beats_odometry_and_loop_closure_is_why(aces):
     """The whole ACES log (23 minutes of a real robot): raw odometry scores 0.55 m on the
     benchmark's relations; the front end alone (scan matching, no loops) drifts less, and
     with loop closures the map holds together (at or below GMapping's published 0.060 m:
-    0.039 m on the machines the method was built on, 0.047 m on an AVX-512 host, where
-    floating point sums in another order and a few loop closures come out otherwise).
+    0.038 m on an AVX-512 host with the suite's BLAS kernels, 0.047 m there while the
+    reader spread the 180 beams over 180 degrees instead of CARMEN's 1 degree apart; on
+    other hosts floating point sums in another order and a few loop closures come out
+    otherwise).
     How fast it runs is ``abcwc bench slam``'s figure, not a test's."""
     log, relations = aces
     odometry = relation_errors(log.odometry, relations).translational_mean

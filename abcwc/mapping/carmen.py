@@ -3,15 +3,20 @@
 CARMEN (Montemerlo, Roy and Thrun, IROS 2003) logs one message per line; the SLAM
 benchmark of Kümmerle et al. (Autonomous Robots 27(4), 2009) ships its data this way.
 Three messages are read, everything else (``#`` comments, ``PARAM`` lines other than
-the front laser's offset, other message types) is skipped:
+the front laser's offset, maximum range and resolution, other message types) is skipped:
 
 * ``ODOM x y theta tv rv accel timestamp host logger_timestamp``: the odometry stream.
 * ``FLASER n r_1 .. r_n x y theta odom_x odom_y odom_theta timestamp host logger_ts``:
-  an old-style front-laser scan. Its beams span 180 degrees in front of the robot, beam
-  ``i`` at ``-pi/2 + i pi / (n - 1)``; ``odom_*`` is the robot's odometry pose at the
-  scan (the first pose, the laser's as the logging program saw it, is not used). The
-  line says nothing of the laser's maximum range or mounting: pass ``max_range`` and
-  ``laser_offset`` (or log the ``robot_frontlaser_offset`` PARAMs).
+  an old-style front-laser scan; ``odom_*`` is the robot's odometry pose at the scan
+  (the first pose, the laser's as the logging program saw it, is not used). The line
+  carries no geometry, so it is CARMEN's own reader's (``readlog.c``): the first beam
+  at -90 degrees, the beams ``laser_front_laser_resolution`` degrees apart where the
+  log's PARAM lines say so, else as a SICK LMS logs them (:func:`guess_flaser_increment`:
+  180 or 181 readings 1 degree apart, 360 or 361 half a degree, 400 or 401 a quarter;
+  any other count spread over 180 degrees). The maximum range is the
+  ``robot_front_laser_max`` PARAM, the offset on the robot the
+  ``robot_frontlaser_*offset`` PARAMs; a log without them needs ``max_range`` and
+  ``laser_offset``.
 * ``ROBOTLASER1 laser_type start_angle fov angular_res max_range accuracy remission_mode
   n r_1 .. r_n m e_1 .. e_m laser_x laser_y laser_theta robot_x robot_y robot_theta tv
   rv forward_safety side_safety turn_axis timestamp host logger_timestamp``: a scan with
@@ -32,6 +37,7 @@ on (N, B) arrays and a Python loop over as many objects.
 
 from __future__ import annotations
 
+import math
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -47,6 +53,20 @@ NO_RETURN_RANGE = 81.83
 LASER_MESSAGES = ("FLASER", "ROBOTLASER1")
 _OFFSET_PARAMS = {"robot_frontlaser_offset": 0, "robot_frontlaser_side_offset": 1,
                   "robot_frontlaser_angular_offset": 2}
+_FLASER_PARAMS = ("robot_front_laser_max", "laser_front_laser_resolution")
+"""PARAMs that give the FLASER lines' maximum range (m) and beam spacing (degrees)."""
+
+
+def guess_flaser_increment(beams: np.ndarray) -> np.ndarray:
+    """(rad) the beam spacing of FLASER scans of ``beams`` readings, as CARMEN's own
+    reader guesses it (``carmen_laser_guess_angle_increment``, CARMEN's ``readlog.c``): a
+    SICK LMS scanning at 1, 0.5 or 0.25 degrees logs 181, 361 or 401 readings, or one
+    fewer when its last is dropped (180, 360, 400); any other count spans 180 degrees."""
+    beams = np.asarray(beams)
+    return np.select([np.isin(beams, (180, 181)), np.isin(beams, (360, 361)),
+                      np.isin(beams, (400, 401))],
+                     [np.pi / 180, np.pi / 360, np.pi / 720],
+                     np.pi / np.maximum(beams - 1, 1))
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,7 +137,8 @@ def read_carmen_log(path: str | Path, *, max_range: float | None = None,
     """Read a CARMEN log's laser scans and odometry (a ``.clf`` file, gzipped or not).
 
     ``max_range`` (m): readings at or beyond it are masked; FLASER lines do not carry it
-    (ACES's SICK has a 50 m range), ROBOTLASER1 lines do (a smaller ``max_range`` here
+    (a log may state it in a ``robot_front_laser_max`` PARAM; ACES's SICK has a 50 m
+    range and the file does not say), ROBOTLASER1 lines do (a smaller ``max_range`` here
     wins). ``laser_offset`` ``(x, y, theta)`` (m, rad): the laser's pose on the robot
     (FR079's is 0.04 m ahead); by default it is the ROBOTLASER1 lines' laser pose seen
     from their robot pose, else the ``robot_frontlaser_*offset`` PARAMs, else zero.
@@ -138,6 +159,7 @@ def read_carmen_log(path: str | Path, *, max_range: float | None = None,
     scans = _ScanLines(path, laser_message)
     odom = _OdomLines(path)
     param_offset = np.zeros(3)
+    laser_params: dict[str, float] = {}
     for number, line in enumerate(lines, 1):
         fields = line.split()
         if not fields or fields[0].startswith("#"):
@@ -149,10 +171,16 @@ def read_carmen_log(path: str | Path, *, max_range: float | None = None,
             odom.add(number, fields)
         elif kind == "PARAM" and len(fields) >= 3 and fields[1] in _OFFSET_PARAMS:
             param_offset[_OFFSET_PARAMS[fields[1]]] = _number(path, number, fields[2])
+        elif kind == "PARAM" and len(fields) >= 3 and fields[1] in _FLASER_PARAMS:
+            value = _number(path, number, fields[2])
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{path}, line {number}: {fields[1]} must be a number > 0, "
+                                 f"got {fields[2]!r}")
+            laser_params[fields[1]] = value
     if not scans.numbers:
         raise ValueError(f"{path}: no {laser_message} lines (no laser scans)")
     (stamps, odometry, logged_offset, angle_min, increment, range_max, beams,
-     ranges) = scans.arrays()
+     ranges) = scans.arrays(laser_params)
     if max_range is not None:
         range_max = np.minimum(range_max, max_range)
     if laser_offset is not None:
@@ -271,9 +299,10 @@ class _ScanLines:
             raise ValueError(f"{self.path}, line {number}: {self.kind} {what} needs "
                              f"{expected} fields, got {len(fields)}")
 
-    def arrays(self) -> tuple[np.ndarray, ...]:
+    def arrays(self, laser_params: dict[str, float]) -> tuple[np.ndarray, ...]:
         """stamps, odometry, logged laser offset (or None), angle_min, angle_increment,
-        range_max, beam counts and NaN-padded ranges."""
+        range_max, beam counts and NaN-padded ranges; FLASER's geometry from the log's
+        ``laser_params`` (:data:`_FLASER_PARAMS`) where it has them."""
         rows = _to_floats(self.path, self.numbers, self.tokens)
         counts = np.array([len(row) - 7 for row in rows])
         if np.all(counts == counts[0]):
@@ -289,8 +318,11 @@ class _ScanLines:
         odometry[:, 2] = wrap_angle(odometry[:, 2])
         if self.kind == "FLASER":
             angle_min = np.full(len(rows), -np.pi / 2)
-            increment = np.pi / np.maximum(counts - 1, 1)
-            range_max = np.full(len(rows), NO_RETURN_RANGE)
+            resolution = laser_params.get("laser_front_laser_resolution")
+            increment = (guess_flaser_increment(counts) if resolution is None
+                         else np.full(len(rows), math.radians(resolution)))
+            range_max = np.full(len(rows), min(NO_RETURN_RANGE, laser_params.get(
+                "robot_front_laser_max", NO_RETURN_RANGE)))
             return stamps, odometry, None, angle_min, increment, range_max, counts, ranges
         geometry = _to_floats(self.path, self.numbers, [list(g) for g in self.geometry])
         angle_min, increment, range_max = np.stack(geometry).T

@@ -57,6 +57,29 @@ def test_a_wall_meets_the_floor_and_the_ceiling_where_the_pinhole_puts_them():
     assert np.allclose(column[math.ceil(top) + 1], wall)
 
 
+def test_with_nothing_standing_within_reach_the_cameras_see_floor_and_ceiling():
+    """A hall whose walls are all beyond the camera's 30 m, with no one in it: the
+    picture is the floor below the horizon and the ceiling above (the same as a wall at
+    100 m gives), and the depth camera reads only the floor; a chair in such a hall
+    drives with its camera on."""
+    from abcwc.sim.depth_camera import render_depth
+    from abcwc.sim.world import box_world
+    from abcwc.types import Twist
+
+    nothing = render(np.zeros((0, 4)), np.zeros((0, 2)))
+    assert np.array_equal(nothing, render(*wall_ahead(100.0)))
+    assert np.allclose(nothing[0], CEILING_RGB) and not np.allclose(nothing[-1], CEILING_RGB)
+    depth = render_depth(CAMERA, POSE, MOUNT, HEIGHT, np.zeros((0, 4)), np.zeros((0, 2)),
+                         NO_PEOPLE, 0.5, 30.0)
+    rows = np.arange(CAMERA.height) - CAMERA.cy
+    below = rows > CAMERA.fy * HEIGHT / 30.0  # rows whose floor is within 30 m
+    assert np.allclose(depth[below, 0], CAMERA.fy * HEIGHT / rows[below])
+    assert np.isnan(depth[~below]).all()
+    chair = SimBase(box_world(80.0, 80.0), people=False, camera="gray")
+    chair.drive(Twist(0.3, 0.0), 0.5)
+    assert chair.frame.readings[CAMERA_FRAME].pixels.shape == (480, 640)
+
+
 def test_a_marker_is_drawn_where_its_corners_project_and_is_found_there():
     marker = aruco_marker_image(3, cell_px=40)
     side = 0.3 * 6 / 8  # the black square of a 0.3 m card with a one-cell quiet zone

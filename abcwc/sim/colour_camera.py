@@ -171,6 +171,9 @@ def render_colour(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float
     people = len(low) - len(seen.walls)
     colours = np.vstack([_wall_colours(seen.walls, seen.bands, origin),
                          PEOPLE_RGB[np.arange(people) % len(PEOPLE_RGB)]])
+    if not z_hits.shape[1]:  # nothing stands within reach: one layer that is never hit
+        z_hits, low, high = np.full((camera.width, 1), np.inf), np.zeros(1), np.zeros(1)
+        colours = np.zeros((1, 3))
     # the nearest few surfaces of each column, far to near
     keep = min(NEAREST_SURFACES, z_hits.shape[1])
     if keep < z_hits.shape[1]:

@@ -87,7 +87,7 @@ def render_depth(camera: PinholeCamera, pose: Pose2D, mount: tuple[float, float,
     # the ray of row v is at height `height - slope z` when z m ahead
     ray_height = height - seen.slope[:, None, None] * seen.z[None, :, :]  # (H, W, K)
     inside = (ray_height >= seen.low) & (ray_height <= seen.high) & np.isfinite(seen.z)[None]
-    depth = np.where(inside, seen.z[None], np.inf).min(axis=2)  # (H, W)
+    depth = np.where(inside, seen.z[None], np.inf).min(axis=2, initial=np.inf)  # (H, W)
     floor = floor_depth(seen.slope, height)
     depth = np.minimum(depth, floor[:, None])
     depth[(depth > max_range) | (depth < min_range)] = np.nan

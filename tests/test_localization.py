@@ -142,3 +142,25 @@ def test_a_person_beside_the_chair_hides_the_walls_but_does_not_make_it_lost():
     assert localizer.see_through_fraction(points, here) < localizer.see_through
     away = here + (0.0, 1.2, 0.0)  # 1.2 m north: across the corridor's wall
     assert localizer.see_through_fraction(points, away) > 0.2
+
+
+def test_in_a_hall_whose_walls_are_out_of_reach_the_chair_dead_reckons_and_is_not_lost():
+    """In the middle of a 40 m hall the 12 m lidar returns nothing: no scan can be
+    matched, and none says the estimate is wrong (no beam reaches through a wall). The
+    filter dead-reckons, and when a wall comes into reach the scans match again."""
+    from abcwc.sim.world import box_world
+
+    world = box_world(40.0, 40.0)
+    chair = SimBase(world, seed=27, lidar=True, people=False)
+    assert chair.params.lidar.max_range < 20.0  # every wall out of reach at the start
+    localizer = MapLocalizer(wall_points(world.walls), chair.pose, lost_after=10)
+    for _ in range(round(4.0 / chair.period)):
+        localizer.observe(chair.step())
+    assert localizer.accepted == 0 and localizer.rejected >= 10
+    assert not localizer.lost
+    for _ in range(round(22.0 / chair.period)):  # 10 m towards the east wall, at 0.5 m/s
+        chair.send(Twist(0.5, 0.0))
+        localizer.observe(chair.step())
+    assert not localizer.lost and localizer.accepted >= 5  # the wall in reach: matched
+    truth, estimate = chair.pose, localizer.pose
+    assert math.hypot(truth.x - estimate.x, truth.y - estimate.y) < 0.1

@@ -21,8 +21,12 @@ the chair hides most of the walls, and the few returns left fit badly. What a wr
 estimate produces, and occlusion cannot, is a beam that reaches *past* a wall of the map
 (the beam model's lesson: short returns are explained by things not on the map, long
 ones are not; Thrun, Burgard and Fox, *Probabilistic Robotics*, 6.3). Only refused
-scans with more than ``see_through`` of their beams passing through the map's walls
-count towards :attr:`MapLocalizer.lost`.
+scans with more than ``see_through`` of their beams passing through the map's walls,
+and at least :data:`MIN_RETURNS` of them, count towards :attr:`MapLocalizer.lost`. In
+the middle of a hall whose walls are beyond the lidar's reach a scan has a handful of
+returns (a pillar's), too few to match and too few to be such evidence: one of eight
+grazing a pillar's mapped edge is not a wrong estimate. The filter dead-reckons on
+until the walls come back into reach.
 
 A corridor fixes the pose across it and not along it: ICP's covariance is long along
 the corridor, and the filter takes from the fix only what it fixes.
@@ -53,6 +57,9 @@ from abcwc.types import LIDAR_FRAME, LaserScan, Pose2D, SensorFrame
 
 GATE_CHI2_3DOF = 16.27
 """The chi-square distribution's 99.9 % point for 3 degrees of freedom."""
+MIN_RETURNS = 10
+"""Returns a scan needs to be matched, and beams through the map's walls a refused scan
+needs to count as evidence that the estimate is wrong (module notes)."""
 
 
 def occupied_points(cells: np.ndarray, grid: GridGeometry) -> np.ndarray:
@@ -183,10 +190,10 @@ class MapLocalizer:
     def match(self, scan: LaserScan) -> bool:
         """Lay ``scan`` on the map from the current estimate; True if the fix was taken."""
         points = transform_points(self.mount, scan.points())
-        if len(points) < 10:
-            return self._refuse(points, None)
         estimate = self.pose
         guess = np.array([estimate.x, estimate.y, estimate.theta])
+        if len(points) < MIN_RETURNS:  # too few returns to match: walls out of reach
+            return self._refuse(points, guess)
         try:
             result = icp(points, self.target, guess,
                          max_correspondence_distance=self.max_correspondence_distance,
@@ -221,7 +228,7 @@ class MapLocalizer:
         corridor's many), the scan fits there as a fix must (``min_fitness``,
         ``max_rms``) and no more than ``see_through`` of its beams pass through a wall."""
         points = transform_points(self.mount, scan.points())
-        if len(points) < 10:
+        if len(points) < MIN_RETURNS:
             return False
         if self._field is None:
             self._field = LikelihoodField(self._map_points, resolution=0.05, sigma=0.05,
@@ -257,8 +264,14 @@ class MapLocalizer:
         """The fraction of a scan's beams (``points``, base_link, m) that, from ``pose``,
         pass through a wall of the map on their way to their return (the last 0.15 m
         before it left out: the wall the beam hit)."""
+        through = self.beams_through_walls(points, pose)
+        return float(through.mean()) if len(through) else 0.0
+
+    def beams_through_walls(self, points: np.ndarray, pose: np.ndarray) -> np.ndarray:
+        """(N,) bool: which of a scan's beams (``points``, base_link, m) pass through a
+        wall of the map from ``pose`` (:meth:`see_through_fraction`)."""
         if not len(points):
-            return 0.0
+            return np.zeros(0, dtype=bool)
         origin = transform_points(pose, np.asarray(self.mount[:2], dtype=float))
         ends = transform_points(pose, points)
         length = np.hypot(*(ends - origin).T)
@@ -272,12 +285,13 @@ class MapLocalizer:
         hit[inside] = self._walls[walk.row[inside], walk.col[inside]]
         through = np.zeros(len(points), dtype=bool)
         through[walk.segment[hit]] = True
-        return float(through.mean())
+        return through
 
-    def _refuse(self, points: np.ndarray, guess: np.ndarray | None) -> bool:
+    def _refuse(self, points: np.ndarray, guess: np.ndarray) -> bool:
         """A refused scan; it counts towards :attr:`lost` only if its beams go through the
         map's walls from the estimate (module notes)."""
         self.rejected += 1
-        if guess is None or self.see_through_fraction(points, guess) > self.see_through:
+        through = self.beams_through_walls(points, guess)
+        if through.sum() >= MIN_RETURNS and through.mean() > self.see_through:
             self.rejected_in_a_row += 1
         return False

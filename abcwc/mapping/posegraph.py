@@ -472,7 +472,7 @@ def chordal(graph: PoseGraph) -> np.ndarray:
                            shape=(2 * m, 2 * int(free.sum()))).tocsc()
     rhs = design.T @ (-(weight[:, None] * known).ravel())
     solution = _solve_symmetric((design.T @ design).tocsc(), rhs)
-    theta = graph.poses[:, 2].astype(float).copy()
+    theta = graph.poses[:, 2].astype(float)
     unit = solution.reshape(-1, 2)
     theta[free] = np.arctan2(unit[:, 1], unit[:, 0])
     return positions_given_headings(graph, theta)
@@ -557,6 +557,6 @@ def _anchored_least_squares(n: int, i: np.ndarray, j: np.ndarray, target: np.nda
         np.add.at(rhs, (d * variable[va][ok, None] + rd).ravel(),
                   sign * weighted[ok, :, 0].ravel())
     solution = _solve_symmetric(normal, rhs)
-    out = anchor.astype(float).copy()
+    out = anchor.astype(float)
     out[free] = solution.reshape(-1, d)
     return out
